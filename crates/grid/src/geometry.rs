@@ -1,0 +1,171 @@
+//! Where a grid sits in space and how a ray enters it: the grid box, per-axis resolution, and
+//! the ray in grid space (cells are unit cubes there, and `t` is unchanged).
+//!
+//! Robustness (Lagae & Dutré's "conservative insertion"): the traversals compute cell
+//! boundaries in f32 (fixed point for Cleary–Wyvill and Liu), so the `t` where they say a ray
+//! leaves a cell can be off by a tiny fraction of a cell. Every structure therefore inserts a
+//! triangle into all cells within [`INSERT_MARGIN_CELLS`] of it, which is far larger than
+//! those errors (≤ ~5e-4 cells at the largest resolution, see each traversal's doc): a hit
+//! whose `t` a traversal attributes to the "wrong" side of a boundary is still found in a cell
+//! already visited. The grid box is padded too, so no triangle touches its faces.
+
+use glam::{UVec3, Vec3};
+use gridrt_scene::Aabb;
+use serde::Serialize;
+
+use crate::triangle::PreparedRay;
+
+/// Largest resolution along one axis. Liu's fixed-point walker keeps coordinates in i32 with
+/// 20 fractional bits: 1024 · 2^20 = 2^30 leaves headroom.
+pub const MAX_AXIS_RES: u32 = 1024;
+/// Insertion margin, in cells, on every side of a triangle (see the module doc).
+pub const INSERT_MARGIN_CELLS: f64 = 1.0 / 256.0;
+
+/// The box and resolution of a uniform grid.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct GridGeometry {
+    pub min: Vec3,
+    pub max: Vec3,
+    pub res: UVec3,
+    /// Cell size per axis (world units).
+    pub cell: Vec3,
+    /// 1 / cell size per axis.
+    pub inv_cell: Vec3,
+}
+
+/// The padded box a grid over `bounds` uses: every axis gets a non-zero extent and a margin.
+pub fn padded_bounds(bounds: &Aabb) -> Aabb {
+    if bounds.is_empty() {
+        return Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
+    }
+    let ext = bounds.extent();
+    let big = ext.max_element();
+    // Flat axes (all z equal, a single triangle in a plane) still need a slab of cells.
+    let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
+    let floor = (big * 1e-3).max(scale * 1e-5).max(1e-6);
+    let pad = Vec3::splat((big * 1e-5).max(scale * 4e-7).max(1e-9));
+    let mut min = bounds.min - pad;
+    let mut max = bounds.max + pad;
+    for a in 0..3 {
+        if max[a] - min[a] < floor {
+            let c = 0.5 * (min[a] + max[a]);
+            min[a] = c - floor * 0.5;
+            max[a] = c + floor * 0.5;
+        }
+    }
+    Aabb { min, max }
+}
+
+impl GridGeometry {
+    /// A grid over `bounds` (padded, see [`padded_bounds`]) with resolution `res`, each axis
+    /// clamped to `1..=MAX_AXIS_RES`.
+    pub fn new(bounds: &Aabb, res: [u32; 3]) -> GridGeometry {
+        let b = padded_bounds(bounds);
+        let res = UVec3::from_array(res).clamp(UVec3::ONE, UVec3::splat(MAX_AXIS_RES));
+        let cell = (b.max - b.min) / res.as_vec3();
+        GridGeometry { min: b.min, max: b.max, res, cell, inv_cell: Vec3::ONE / cell }
+    }
+
+    pub fn cell_count(&self) -> u64 {
+        self.res.x as u64 * self.res.y as u64 * self.res.z as u64
+    }
+
+    /// Linear cell index, x fastest.
+    #[inline]
+    pub fn cell_index(&self, c: UVec3) -> usize {
+        (c.x + self.res.x * (c.y + self.res.y * c.z)) as usize
+    }
+
+    /// The ray in grid space clipped to the grid box and to `[tmin, tmax]`, or `None` when the
+    /// segment misses the grid.
+    pub fn clip(&self, r: &PreparedRay) -> Option<GridRay> {
+        let o = (r.org - self.min) * self.inv_cell;
+        let mut d = r.dir * self.inv_cell;
+        // A component so small that its reciprocal overflows is treated as exactly parallel,
+        // by the clip and by every walker (they test `d[a] == 0`).
+        for a in 0..3 {
+            if !(1.0 / d[a]).is_finite() {
+                d[a] = 0.0;
+            }
+        }
+        let inv_d = Vec3::ONE / d;
+        let res = self.res.as_vec3();
+        let mut t0 = r.tmin;
+        let mut t1 = r.tmax;
+        for a in 0..3 {
+            if d[a] == 0.0 {
+                if !(o[a] >= 0.0 && o[a] <= res[a]) {
+                    return None;
+                }
+                continue;
+            }
+            let ta = (0.0 - o[a]) * inv_d[a];
+            let tb = (res[a] - o[a]) * inv_d[a];
+            let (lo, hi) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+            // NaN-safe: a NaN bound (infinite inv_d meeting a zero) never narrows the range.
+            if lo > t0 {
+                t0 = lo;
+            }
+            if hi < t1 {
+                t1 = hi;
+            }
+        }
+        if !(t0 <= t1) || !t0.is_finite() || !t1.is_finite() {
+            return None;
+        }
+        Some(GridRay { o, d, inv_d, t0, t1 })
+    }
+}
+
+/// A ray in grid space (cell `(i, j, k)` is the unit cube at `(i, j, k)`), clipped: the
+/// segment `[t0, t1]` lies in the grid box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridRay {
+    pub o: Vec3,
+    pub d: Vec3,
+    pub inv_d: Vec3,
+    pub t0: f32,
+    pub t1: f32,
+}
+
+impl GridRay {
+    /// The cell containing the segment's start, clamped into the grid.
+    #[inline]
+    pub fn start_cell(&self, res: UVec3) -> UVec3 {
+        let p = self.o + self.d * self.t0;
+        cell_of(p, res)
+    }
+
+    /// The cell containing the segment's end, clamped into the grid.
+    #[inline]
+    pub fn end_cell(&self, res: UVec3) -> UVec3 {
+        let p = self.o + self.d * self.t1;
+        cell_of(p, res)
+    }
+
+    /// Where the ray leaves cell `c` (the nearest far-side plane crossing), capped at `t1`.
+    /// Computed from the cell index, so walkers that do not track `t` (Liu, Bresenham) report
+    /// the same geometric exit as the float walkers.
+    #[inline]
+    pub fn exit_of_cell(&self, c: UVec3) -> f32 {
+        let mut t = self.t1;
+        for a in 0..3 {
+            if self.d[a] != 0.0 {
+                let plane = if self.d[a] > 0.0 { c[a] as f32 + 1.0 } else { c[a] as f32 };
+                let ta = (plane - self.o[a]) * self.inv_d[a];
+                if ta < t {
+                    t = ta;
+                }
+            }
+        }
+        t
+    }
+}
+
+#[inline]
+fn cell_of(p: Vec3, res: UVec3) -> UVec3 {
+    let f = p.floor();
+    let max = (res - UVec3::ONE).as_vec3();
+    // NaN-free by construction (p is finite); clamp handles points on the far faces.
+    f.clamp(Vec3::ZERO, max).as_uvec3()
+}

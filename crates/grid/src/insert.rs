@@ -1,0 +1,116 @@
+//! Which cells a triangle goes into (sort-last insertion, survey §3): by its bounding box
+//! (fast, more references) or by an exact triangle–box overlap test (separating axes,
+//! Akenine-Möller 2001). Both are conservative: every cell within
+//! [`INSERT_MARGIN_CELLS`](crate::geometry::INSERT_MARGIN_CELLS) of the triangle is included,
+//! and the exact test runs in f64 against the enlarged cell.
+//!
+//! Zero-area triangles are inserted like any other: three collinear points can round to a
+//! sliver of non-zero area in the f32 shear of the watertight test, and the brute-force
+//! reference would then hit them, so skipping them would break bit-exact agreement.
+
+use glam::{DVec3, UVec3, Vec3};
+use serde::Serialize;
+
+use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
+
+/// How triangles are assigned to cells.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum InsertMode {
+    /// Every cell overlapped by the triangle's bounding box.
+    #[default]
+    BoundingBox,
+    /// Only cells the triangle itself overlaps (SAT test per candidate cell).
+    Exact,
+}
+
+/// A triangle in grid space (cells are unit cubes), f64.
+#[derive(Clone, Copy, Debug)]
+pub struct GridTriangle {
+    pub v: [DVec3; 3],
+    pub lo: UVec3,
+    pub hi: UVec3,
+}
+
+/// The triangle in grid space with its conservative cell range. The range is clamped to the grid (triangles outside the grid box are clamped
+/// too; a grid is always built over bounds that contain all triangles).
+#[inline]
+pub fn prepare(geom: &GridGeometry, tri: &[Vec3; 3]) -> GridTriangle {
+    let min = geom.min.as_dvec3();
+    let inv = geom.inv_cell.as_dvec3();
+    let v = tri.map(|p| (p.as_dvec3() - min) * inv);
+    let lo = v[0].min(v[1]).min(v[2]) - DVec3::splat(INSERT_MARGIN_CELLS);
+    let hi = v[0].max(v[1]).max(v[2]) + DVec3::splat(INSERT_MARGIN_CELLS);
+    let max = (geom.res - UVec3::ONE).as_dvec3();
+    let lo = lo.floor().clamp(DVec3::ZERO, max).as_uvec3();
+    let hi = hi.floor().clamp(DVec3::ZERO, max).as_uvec3();
+    GridTriangle { v, lo, hi }
+}
+
+/// Calls `f(cell_index)` for every cell `tri` is inserted into, in increasing index order
+/// (z, then y, then x), and returns how many.
+#[inline]
+pub fn for_each_cell(geom: &GridGeometry, g: &GridTriangle, mode: InsertMode, mut f: impl FnMut(usize)) -> u32 {
+    let single = g.lo == g.hi;
+    let mut n = 0;
+    for z in g.lo.z..=g.hi.z {
+        for y in g.lo.y..=g.hi.y {
+            for x in g.lo.x..=g.hi.x {
+                let c = UVec3::new(x, y, z);
+                if mode == InsertMode::Exact && !single && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + INSERT_MARGIN_CELLS) {
+                    continue;
+                }
+                f(geom.cell_index(c));
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// Number of cells `tri` goes into (for counting N_m without building).
+#[inline]
+pub fn cell_count(geom: &GridGeometry, g: &GridTriangle, mode: InsertMode) -> u64 {
+    match mode {
+        InsertMode::BoundingBox => {
+            let e = g.hi - g.lo + UVec3::ONE;
+            e.x as u64 * e.y as u64 * e.z as u64
+        }
+        InsertMode::Exact => for_each_cell(geom, g, mode, |_| {}) as u64,
+    }
+}
+
+/// Separating-axis triangle/box overlap test (Akenine-Möller), box = cube at `c` with half
+/// size `h`. Touching counts as overlap.
+pub fn tri_box_overlap(tri: &[DVec3; 3], c: DVec3, h: f64) -> bool {
+    let v0 = tri[0] - c;
+    let v1 = tri[1] - c;
+    let v2 = tri[2] - c;
+    let e = [v1 - v0, v2 - v1, v0 - v2];
+    // 9 axes: box axis × triangle edge.
+    for edge in e {
+        for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+            let a = axis.cross(edge);
+            if a == DVec3::ZERO {
+                continue;
+            }
+            let p0 = a.dot(v0);
+            let p1 = a.dot(v1);
+            let p2 = a.dot(v2);
+            let r = h * (a.x.abs() + a.y.abs() + a.z.abs());
+            if p0.min(p1).min(p2) > r || p0.max(p1).max(p2) < -r {
+                return false;
+            }
+        }
+    }
+    // Box face normals: the triangle's bounding box against the box.
+    let mn = v0.min(v1).min(v2);
+    let mx = v0.max(v1).max(v2);
+    if mn.x > h || mn.y > h || mn.z > h || mx.x < -h || mx.y < -h || mx.z < -h {
+        return false;
+    }
+    // Triangle plane.
+    let n = e[0].cross(e[1]);
+    let d = n.dot(v0);
+    let r = h * (n.x.abs() + n.y.abs() + n.z.abs());
+    d.abs() <= r
+}

@@ -1,0 +1,58 @@
+//! CPU grid acceleration structures for gridrt (pure Rust; compiles for wasm32 with the
+//! `parallel` feature off).
+//!
+//! Data flows one way: triangles → [`resolution`] (choose the grid size) → [`flat`] (build,
+//! using [`insert`]) → [`trace`] (closest hit, walking cells with a [`traversal`]) → hits and
+//! [`stats`]. [`brute`] is the reference every structure must reproduce bit for bit.
+
+pub mod brute;
+pub mod flat;
+pub mod geometry;
+pub mod insert;
+pub mod mailbox;
+pub mod resolution;
+pub mod stats;
+pub mod trace;
+pub mod traversal;
+pub mod triangle;
+
+use glam::Vec3;
+use gridrt_scene::Aabb;
+use thiserror::Error;
+
+pub use flat::{BuildOptions, FlatGrid, PhaseTimes};
+pub use geometry::GridGeometry;
+pub use insert::InsertMode;
+pub use resolution::{CostModel, Resolution, ResolutionChoice};
+pub use stats::{BatchStats, RayStats};
+pub use trace::TraceOptions;
+pub use traversal::Traversal;
+
+#[derive(Debug, Error, PartialEq)]
+pub enum BuildError {
+    #[error("{0} triangles: a grid indexes at most 2^32 - 2")]
+    TooManyTriangles(u64),
+    #[error("the grid would hold {refs} triangle references, more than the limit of {limit}; lower the resolution or use bounding-box-free exact insertion")]
+    TooManyReferences { refs: u64, limit: u64 },
+}
+
+/// Bounds of a triangle soup (all corners).
+pub fn triangle_bounds(tris: &[[Vec3; 3]]) -> Aabb {
+    Aabb::from_points(tris.iter().flatten())
+}
+
+/// Chooses the resolution and builds a flat grid: the whole pipeline of `gridrt build`.
+/// Phase times: `bounds`, `resolution`, then the build's own phases.
+pub fn build_flat(
+    tris: &[[Vec3; 3]],
+    policy: Resolution,
+    model: &CostModel,
+    opts: BuildOptions,
+) -> Result<(FlatGrid, ResolutionChoice, PhaseTimes), BuildError> {
+    let mut times = PhaseTimes::default();
+    let bounds = times.record("bounds", || triangle_bounds(tris));
+    let choice = times.record("resolution", || resolution::choose(tris, &bounds, policy, model, opts.insert, opts.parallel));
+    let geom = GridGeometry::new(&bounds, choice.resolution);
+    let grid = FlatGrid::build(tris, geom, opts, &mut times)?;
+    Ok((grid, choice, times))
+}

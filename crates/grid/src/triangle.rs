@@ -1,0 +1,110 @@
+//! Watertight ray/triangle intersection (Woop, Benthin, Wald 2013), the one test every
+//! traversal and the brute-force reference share, so their hits agree to the bit.
+//!
+//! The ray is prepared once ([`PreparedRay`]): the dominant direction axis becomes z, and a
+//! shear maps the direction onto +z. Each triangle is translated to the ray origin and sheared
+//! the same way; the 2-D edge functions U, V, W then decide inside/outside. A shared edge is
+//! evaluated from the same sheared vertices in both triangles (only the operand order flips,
+//! which negates the result exactly), so no ray slips between two triangles.
+//!
+//! Differences from the paper, on purpose:
+//! - no double-precision re-evaluation when an edge function is exactly zero: WGSL has no
+//!   f64, and the GPU port must do the same arithmetic. A zero edge function counts as
+//!   inside, so a ray through an edge or vertex hits every triangle around it (the
+//!   deterministic tie-break then picks the smallest triangle index): still watertight.
+//! - no back-face culling; `t` is computed by one division and must be finite and inside
+//!   `[tmin, tmax]` (closed interval).
+
+use glam::Vec3;
+use gridrt_scene::Ray;
+
+/// A ray with the per-ray constants of the watertight test.
+#[derive(Clone, Copy, Debug)]
+pub struct PreparedRay {
+    pub org: Vec3,
+    pub dir: Vec3,
+    pub tmin: f32,
+    pub tmax: f32,
+    pub kx: usize,
+    pub ky: usize,
+    pub kz: usize,
+    pub sx: f32,
+    pub sy: f32,
+    pub sz: f32,
+}
+
+impl PreparedRay {
+    /// Returns `None` for rays no triangle can be hit by: zero or non-finite direction,
+    /// non-finite origin, NaN bounds or an empty `[tmin, tmax]`.
+    pub fn new(ray: &Ray) -> Option<PreparedRay> {
+        let org = ray.o();
+        let dir = ray.d();
+        if !org.is_finite() || !dir.is_finite() || dir == Vec3::ZERO || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax
+        {
+            return None;
+        }
+        let a = dir.abs();
+        // Dominant axis; ties go to the lower axis (deterministic, same rule on the GPU).
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Keep the winding: swap when the dominant component is negative.
+        if dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let sz = 1.0 / dir[kz];
+        Some(PreparedRay { org, dir, tmin: ray.tmin, tmax: ray.tmax, kx, ky, kz, sx: dir[kx] * sz, sy: dir[ky] * sz, sz })
+    }
+}
+
+/// A hit before it becomes a [`gridrt_scene::Hit`]: parameter and barycentrics of corners 1, 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriHit {
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// Watertight intersection of `r` with triangle `tri`; `None` on a miss.
+#[inline]
+pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
+    let a = tri[0] - r.org;
+    let b = tri[1] - r.org;
+    let c = tri[2] - r.org;
+    let ax = a[r.kx] - r.sx * a[r.kz];
+    let ay = a[r.ky] - r.sy * a[r.kz];
+    let bx = b[r.kx] - r.sx * b[r.kz];
+    let by = b[r.ky] - r.sy * b[r.kz];
+    let cx = c[r.kx] - r.sx * c[r.kz];
+    let cy = c[r.ky] - r.sy * c[r.kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let az = r.sz * a[r.kz];
+    let bz = r.sz * b[r.kz];
+    let cz = r.sz * c[r.kz];
+    let t = (u * az + v * bz + w * cz) / det;
+    if !(t >= r.tmin && t <= r.tmax && t < f32::INFINITY) {
+        return None;
+    }
+    Some(TriHit { t, u: v / det, v: w / det })
+}
+
+/// Deterministic order of candidate hits: smaller `t`, then smaller triangle index.
+#[inline]
+pub fn closer(t: f32, tri: u32, best_t: f32, best_tri: u32) -> bool {
+    t < best_t || (t == best_t && tri < best_tri)
+}

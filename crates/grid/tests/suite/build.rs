@@ -1,0 +1,144 @@
+//! Build invariants: the compact layout, conservative insertion, determinism, resolution
+//! policies and the cost model.
+
+use glam::Vec3;
+use gridrt_grid::insert::{InsertMode, prepare, tri_box_overlap};
+use gridrt_grid::resolution::{self, CostModel, Resolution};
+use gridrt_grid::{BuildOptions, FlatGrid, GridGeometry, PhaseTimes, build_flat, triangle_bounds};
+use gridrt_scene::procedural::{self, SceneKind};
+
+fn tris_of(kind: SceneKind, size: u32) -> Vec<[Vec3; 3]> {
+    procedural::generate(kind, size, 5).mesh.triangles()
+}
+
+#[test]
+fn layout_is_consistent_and_sorted() {
+    let tris = tris_of(SceneKind::Particles, 3000);
+    for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+        let (g, _, _) = build_flat(&tris, Resolution::Cubic(17), &CostModel::default(), BuildOptions { insert, parallel: true }).unwrap();
+        assert_eq!(g.cell_start.len() as u64, g.geom.cell_count() + 1);
+        assert_eq!(*g.cell_start.last().unwrap() as usize, g.refs.len());
+        assert!(g.cell_start.windows(2).all(|w| w[0] <= w[1]));
+        for c in 0..g.geom.cell_count() as usize {
+            let refs = g.cell(c);
+            assert!(refs.windows(2).all(|w| w[0] < w[1]), "cell {c} not strictly increasing");
+        }
+        // Every triangle is referenced at least once.
+        let mut seen = vec![false; tris.len()];
+        for &r in &g.refs {
+            seen[r as usize] = true;
+        }
+        assert!(seen.iter().all(|&s| s), "{insert:?}: a triangle is in no cell");
+    }
+}
+
+#[test]
+fn exact_insertion_is_a_subset_of_bbox_insertion_and_covers_the_triangle() {
+    let tris = tris_of(SceneKind::Slivers, 2000);
+    let opts = |insert| BuildOptions { insert, parallel: false };
+    let (bb, _, _) = build_flat(&tris, Resolution::Cubic(24), &CostModel::default(), opts(InsertMode::BoundingBox)).unwrap();
+    let (ex, _, _) = build_flat(&tris, Resolution::Cubic(24), &CostModel::default(), opts(InsertMode::Exact)).unwrap();
+    assert!(ex.refs.len() < bb.refs.len() / 2, "slivers: exact {} vs bbox {}", ex.refs.len(), bb.refs.len());
+    for c in 0..ex.geom.cell_count() as usize {
+        let (e, b) = (ex.cell(c), bb.cell(c));
+        assert!(e.iter().all(|t| b.contains(t)));
+    }
+    // Points sampled on each triangle lie in (or within the margin of) a cell holding it.
+    let g = &ex.geom;
+    for (i, t) in tris.iter().enumerate().step_by(7) {
+        for (a, b) in [(0.2f32, 0.3f32), (0.9, 0.05), (0.0, 0.0), (0.5, 0.5)] {
+            let p = t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b;
+            let c = ((p - g.min) * g.inv_cell).floor().as_uvec3().min(g.res - 1);
+            assert!(ex.cell(g.cell_index(c)).contains(&(i as u32)), "triangle {i} point {p} not in its cell {c}");
+        }
+    }
+}
+
+#[test]
+fn tri_box_overlap_matches_known_cases() {
+    use glam::DVec3;
+    let t = [DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 1.0, 0.0)];
+    assert!(tri_box_overlap(&t, DVec3::new(0.2, 0.2, 0.0), 0.1));
+    assert!(!tri_box_overlap(&t, DVec3::new(0.9, 0.9, 0.0), 0.1)); // beyond the hypotenuse
+    assert!(!tri_box_overlap(&t, DVec3::new(0.2, 0.2, 0.5), 0.1)); // above the plane
+    assert!(tri_box_overlap(&t, DVec3::new(0.2, 0.2, 0.1), 0.1)); // touching counts
+}
+
+#[test]
+fn parallel_build_is_bit_identical_to_serial() {
+    for kind in [SceneKind::Particles, SceneKind::Slivers, SceneKind::Mountain] {
+        let tris = tris_of(kind, if kind == SceneKind::Mountain { 6 } else { 20_000 });
+        for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+            let geom = GridGeometry::new(&triangle_bounds(&tris), [37, 23, 41]);
+            let a = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: false }, &mut PhaseTimes::default()).unwrap();
+            let b = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: true }, &mut PhaseTimes::default()).unwrap();
+            assert!(a == b, "{kind:?} {insert:?}");
+        }
+    }
+}
+
+#[test]
+fn non_cubic_scenes_get_near_cubic_cells() {
+    let b = gridrt_scene::Aabb { min: Vec3::ZERO, max: Vec3::new(100.0, 10.0, 1.0) };
+    let r = resolution::cubic_cells(&b, 1000.0 * 100.0);
+    let cell = Vec3::new(100.0 / r[0] as f32, 10.0 / r[1] as f32, 1.0 / r[2] as f32);
+    assert!(cell.max_element() / cell.min_element() < 1.3, "{r:?} {cell}");
+    // A flat scene (all z equal) still gets a valid grid, one cell thick.
+    let flat = gridrt_scene::Aabb { min: Vec3::ZERO, max: Vec3::new(1.0, 1.0, 0.0) };
+    let r = resolution::cubic_cells(&flat, 10_000.0);
+    assert_eq!(r[2], 1);
+    assert!(r[0] >= 50 && r[0] == r[1], "{r:?}");
+}
+
+#[test]
+fn resolution_policies_follow_their_formulas() {
+    let tris = tris_of(SceneKind::Particles, 8000);
+    let b = triangle_bounds(&tris);
+    let m = CostModel::default();
+    let cells = |p| {
+        let r = resolution::choose(&tris, &b, p, &m, InsertMode::BoundingBox, false).resolution;
+        r.iter().map(|&x| x as f64).product::<f64>()
+    };
+    let n = tris.len() as f64;
+    let near = |got: f64, want: f64| (got / want - 1.0).abs() < 0.25;
+    assert!(near(cells(Resolution::Density(2.0)), 2.0 * n));
+    assert!(near(cells(Resolution::Point), 2.0 * n * 5.0)); // eq. (1): 2N·Tinter/Tstep
+    let line = (n * 5.0).powf(1.5).min(m.cell_cap(tris.len()) as f64);
+    assert!(near(cells(Resolution::Line), line)); // eq. (2), capped by memory
+    assert_eq!(resolution::choose(&tris, &b, Resolution::Explicit([3, 4, 5]), &m, InsertMode::BoundingBox, false).resolution, [3, 4, 5]);
+    assert_eq!(resolution::choose(&tris, &b, Resolution::Cubic(40), &m, InsertMode::BoundingBox, false).resolution.iter().max(), Some(&40));
+    for s in ["auto", "point", "line", "density=3.5", "m=64", "10,20,30"] {
+        assert!(s.parse::<Resolution>().is_ok(), "{s}");
+    }
+    for s in ["", "m=0", "density=-1", "1,2", "m=99999", "foo", "0,1,1"] {
+        assert!(s.parse::<Resolution>().is_err(), "{s}");
+    }
+}
+
+#[test]
+fn guess_and_check_counts_exactly_and_picks_the_minimum() {
+    let tris = tris_of(SceneKind::Mountain, 6);
+    let b = triangle_bounds(&tris);
+    let model = CostModel::default();
+    for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+        let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, insert, true);
+        assert!(choice.curve.len() >= 5, "{:?}", choice.curve);
+        assert!(choice.curve.windows(2).all(|w| w[0].m < w[1].m));
+        let best = choice.curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap();
+        assert_eq!(best.resolution, choice.resolution);
+        // N_m from counting equals the reference count of the built grid, for some samples.
+        for s in choice.curve.iter().step_by(4) {
+            let grid = FlatGrid::build(&tris, GridGeometry::new(&b, s.resolution), BuildOptions { insert, parallel: true }, &mut PhaseTimes::default()).unwrap();
+            assert_eq!(grid.refs.len() as u64, s.n_m);
+            assert!((s.cost - model.cost(s.cells, s.n_m)).abs() < 1e-9);
+        }
+        // The interval is the survey's: from (10N)^⅓ up.
+        let lo = (10.0 * tris.len() as f64).cbrt();
+        assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
+    }
+    // Different constants move the optimum: expensive steps give coarser grids.
+    let cheap = resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step: 0.02, ..model }, InsertMode::BoundingBox, true);
+    let dear = resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step: 1.0, ..model }, InsertMode::BoundingBox, true);
+    let m = |c: &gridrt_grid::ResolutionChoice| c.resolution.iter().map(|&x| x as f64).product::<f64>();
+    assert!(m(&cheap) > m(&dear), "{:?} vs {:?}", cheap.resolution, dear.resolution);
+}

@@ -1,0 +1,79 @@
+//! Shared helpers: scenes, ray sets, the brute-force reference, the shared-scene folder.
+
+use std::path::PathBuf;
+
+use glam::Vec3;
+use gridrt_grid::{BatchStats, brute, trace::trace_batch};
+use gridrt_scene::procedural::{self, SceneKind};
+use gridrt_scene::rays::{camera_rays, inside_rays, random_rays};
+use gridrt_scene::rng::Rng;
+use gridrt_scene::{Camera, Hit, Mesh, Ray};
+
+/// `../shared/scenes` next to the repository, when present.
+pub fn shared_scenes() -> Vec<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "glb")).collect())
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// Procedural test scenes small enough for a brute-force reference over 100k rays.
+pub fn procedural_scenes() -> Vec<(String, procedural::Generated)> {
+    vec![
+        ("mountain".into(), procedural::generate(SceneKind::Mountain, 6, 1)),
+        ("sphereflake".into(), procedural::sphereflake(1, 2)),
+        ("particles".into(), procedural::generate(SceneKind::Particles, 6000, 2)),
+        ("slivers".into(), procedural::generate(SceneKind::Slivers, 3000, 3)),
+        ("teapot-in-stadium".into(), procedural::generate(SceneKind::TeapotInStadium, 1, 4)),
+    ]
+}
+
+/// `count` rays: 40% random, 35% camera (primary), 15% from inside points aimed at vertices and
+/// edges, 10% random with clipped [tmin, tmax] and unnormalised directions.
+pub fn mixed_rays(mesh: &Mesh, inside: &[Vec3], count: usize, seed: u64) -> Vec<Ray> {
+    let b = mesh.bounds();
+    let n_random = count * 40 / 100;
+    let n_cam = count * 35 / 100;
+    let n_inside = count * 15 / 100;
+    let n_clip = count - n_random - n_cam - n_inside;
+    let mut rays = random_rays(&b, n_random, seed);
+    rays.extend(camera_rays(&Camera::fit(&b, 4.0 / 3.0), n_cam));
+    let origins: Vec<Vec3> = if inside.is_empty() { vec![b.center()] } else { inside.to_vec() };
+    let per = n_inside.div_ceil(origins.len()).max(1);
+    let mut ins = Vec::new();
+    for (i, o) in origins.iter().enumerate() {
+        ins.extend(inside_rays(mesh, *o, per, seed + i as u64));
+    }
+    ins.truncate(n_inside);
+    rays.extend(ins);
+    let mut rng = Rng::new(seed ^ 0xABCD);
+    for r in random_rays(&b, n_clip, seed + 99) {
+        let scale = 10f32.powf(rng.range(-3.0, 3.0));
+        let len = b.diagonal() / scale;
+        let tmin = rng.range(0.0, 0.5) * len;
+        let tmax = tmin + rng.range(0.0, 1.0) * len;
+        rays.push(Ray::new(r.o(), r.d() * scale, tmin, tmax));
+    }
+    rays
+}
+
+/// Brute-force reference hits (all threads).
+pub fn reference(tris: &[[Vec3; 3]], rays: &[Ray]) -> (Vec<Hit>, BatchStats) {
+    trace_batch(rays, true, |r| brute::trace(tris, r))
+}
+
+/// Asserts bit-exact equality of two hit lists, naming the first differences.
+pub fn assert_same_hits(what: &str, rays: &[Ray], expected: &[Hit], got: &[Hit]) {
+    assert_eq!(expected.len(), got.len());
+    let bad: Vec<usize> = (0..expected.len()).filter(|&i| !expected[i].same_bits(&got[i])).collect();
+    if !bad.is_empty() {
+        let show: Vec<String> = bad
+            .iter()
+            .take(5)
+            .map(|&i| format!("ray {i} {:?}: expected {:?}, got {:?}", rays[i], expected[i], got[i]))
+            .collect();
+        panic!("{what}: {} of {} rays differ from brute force:\n{}", bad.len(), rays.len(), show.join("\n"));
+    }
+}

@@ -1,0 +1,5 @@
+//! Test modules and shared helpers.
+pub mod build;
+pub mod closest_hit;
+pub mod common;
+pub mod traversal;

@@ -1,0 +1,107 @@
+//! Typed errors for everything that reads scene and ray files.
+//!
+//! Every variant names the file (`source`) and, where it applies, the mesh, primitive, accessor
+//! or vertex at fault, so a user can find the problem without a debugger.
+
+use thiserror::Error;
+
+/// Where in a glTF document a problem sits: `mesh 3 "Body", primitive 1`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrimitiveRef {
+    pub mesh: usize,
+    pub mesh_name: Option<String>,
+    pub primitive: usize,
+}
+
+impl std::fmt::Display for PrimitiveRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.mesh_name {
+            Some(n) => write!(f, "mesh {} \"{}\", primitive {}", self.mesh, n, self.primitive),
+            None => write!(f, "mesh {}, primitive {}", self.mesh, self.primitive),
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum SceneError {
+    #[error("{source_name}: cannot read file: {err}")]
+    Io {
+        source_name: String,
+        #[source]
+        err: std::io::Error,
+    },
+    #[error("{source_name}: not a glTF file (neither a .glb binary nor JSON): {detail}")]
+    NotGltf { source_name: String, detail: String },
+    #[error("{source_name}: truncated .glb: {detail}")]
+    TruncatedGlb { source_name: String, detail: String },
+    #[error("{source_name}: malformed .glb: {detail}")]
+    InvalidGlb { source_name: String, detail: String },
+    #[error("{source_name}: invalid glTF JSON: {detail}")]
+    InvalidJson { source_name: String, detail: String },
+    #[error("{source_name}: buffer {buffer}: {detail}")]
+    Buffer { source_name: String, buffer: usize, detail: String },
+    #[error("{source_name}: {at}: accessor {accessor} ({semantic}) out of bounds: {detail}")]
+    AccessorOutOfBounds {
+        source_name: String,
+        at: PrimitiveRef,
+        accessor: usize,
+        semantic: &'static str,
+        detail: String,
+    },
+    #[error("{source_name}: {at}: accessor {accessor} ({semantic}) is invalid: {detail}")]
+    InvalidAccessor {
+        source_name: String,
+        at: PrimitiveRef,
+        accessor: usize,
+        semantic: &'static str,
+        detail: String,
+    },
+    #[error(
+        "{source_name}: {at}: POSITION accessor {accessor} has {found} components; gridrt needs \
+         32-bit float VEC3 positions"
+    )]
+    NonFloatPositions { source_name: String, at: PrimitiveRef, accessor: usize, found: String },
+    #[error("{source_name}: {at}: has no POSITION attribute")]
+    MissingPositions { source_name: String, at: PrimitiveRef },
+    #[error(
+        "{source_name}: {at}: index {index_position} is {index}, but the primitive has only \
+         {vertex_count} vertices"
+    )]
+    IndexOutOfRange {
+        source_name: String,
+        at: PrimitiveRef,
+        index_position: usize,
+        index: u32,
+        vertex_count: usize,
+    },
+    #[error("{source_name}: {at}, node {node}: vertex {vertex} is not finite: {value:?}")]
+    NonFiniteVertex {
+        source_name: String,
+        at: PrimitiveRef,
+        node: usize,
+        vertex: usize,
+        value: [f32; 3],
+    },
+    #[error("{source_name}: node {node}: {detail}")]
+    InvalidNode { source_name: String, node: usize, detail: String },
+    #[error("{source_name}: the scene has no triangles{detail}")]
+    NoTriangles { source_name: String, detail: String },
+    #[error("{source_name}: too large: {what} is {count}, the limit is {limit}")]
+    TooLarge { source_name: String, what: &'static str, count: u64, limit: u64 },
+    #[error("{source_name}: {detail}")]
+    Unsupported { source_name: String, detail: String },
+}
+
+#[derive(Debug, Error)]
+pub enum RayFileError {
+    #[error("{source_name}: cannot read or write: {err}")]
+    Io {
+        source_name: String,
+        #[source]
+        err: std::io::Error,
+    },
+    #[error(
+        "{source_name}: size {len} bytes is not a multiple of {record} bytes (one {what} record)"
+    )]
+    BadSize { source_name: String, len: u64, record: usize, what: &'static str },
+}

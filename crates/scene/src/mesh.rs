@@ -1,0 +1,167 @@
+//! The flattened triangle mesh every other stage consumes, its bounding box and the load report.
+//!
+//! A scene, however it was authored, becomes one indexed triangle list in world space. The
+//! triangle order is a public contract (see [`crate::gltf_load`]): hit files store triangle
+//! indices, so two tools that load the same file must agree on which triangle is number `i`.
+
+use glam::Vec3;
+use serde::Serialize;
+
+/// Axis-aligned bounding box. An empty box has `min > max` on every axis.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
+
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    pub fn union(&self, other: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    pub fn from_points<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for p in points {
+            b.grow(*p);
+        }
+        b
+    }
+
+    pub fn extent(&self) -> Vec3 {
+        if self.is_empty() { Vec3::ZERO } else { self.max - self.min }
+    }
+
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    pub fn diagonal(&self) -> f32 {
+        self.extent().length()
+    }
+}
+
+/// One indexed triangle mesh in world space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// The three corners of triangle `i`.
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[i];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// All triangles as corner triples, in triangle order: the form the grid and the
+    /// intersection code work on (no index indirection on the hot path).
+    pub fn triangles(&self) -> Vec<[Vec3; 3]> {
+        (0..self.indices.len()).map(|i| self.triangle(i)).collect()
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        // Only referenced vertices count: an unused vertex far away must not stretch the grid.
+        let mut b = Aabb::EMPTY;
+        for tri in &self.indices {
+            for &i in tri {
+                b.grow(self.positions[i as usize]);
+            }
+        }
+        b
+    }
+
+    /// Appends `other`, re-basing its indices; triangle order is `self` then `other`.
+    pub fn append(&mut self, other: &Mesh) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.indices.extend(other.indices.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+    }
+
+    /// Number of zero-area triangles (exactly collinear or coincident corners, computed in f64
+    /// so that only truly degenerate triangles count).
+    pub fn degenerate_count(&self) -> usize {
+        (0..self.indices.len()).filter(|&i| is_degenerate(self.triangle(i))).count()
+    }
+}
+
+/// True when the triangle has zero area (its corners are collinear or coincide).
+pub fn is_degenerate(t: [Vec3; 3]) -> bool {
+    let a = t[0].as_dvec3();
+    let e1 = t[1].as_dvec3() - a;
+    let e2 = t[2].as_dvec3() - a;
+    e1.cross(e2) == glam::DVec3::ZERO
+}
+
+/// What loading a scene found: printed by `gridrt info`, shown in the app.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct LoadReport {
+    pub source: String,
+    pub triangles: usize,
+    pub vertices: usize,
+    pub bounds_min: [f32; 3],
+    pub bounds_max: [f32; 3],
+    pub degenerate_triangles: usize,
+    pub meshes: usize,
+    pub primitives: usize,
+    /// Primitives that were not turned into triangles, with the reason (points, lines, …).
+    pub skipped_primitives: Vec<String>,
+}
+
+impl LoadReport {
+    pub fn for_mesh(source: &str, mesh: &Mesh) -> LoadReport {
+        let b = mesh.bounds();
+        let (min, max) = if b.is_empty() { (Vec3::ZERO, Vec3::ZERO) } else { (b.min, b.max) };
+        LoadReport {
+            source: source.to_string(),
+            triangles: mesh.triangle_count(),
+            vertices: mesh.positions.len(),
+            bounds_min: min.to_array(),
+            bounds_max: max.to_array(),
+            degenerate_triangles: mesh.degenerate_count(),
+            meshes: 1,
+            primitives: 1,
+            skipped_primitives: Vec::new(),
+        }
+    }
+}
+
+impl std::fmt::Display for LoadReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "scene:       {}", self.source)?;
+        writeln!(f, "triangles:   {}", self.triangles)?;
+        writeln!(f, "vertices:    {}", self.vertices)?;
+        writeln!(f, "meshes:      {} ({} primitives)", self.meshes, self.primitives)?;
+        writeln!(
+            f,
+            "bounds:      [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
+            self.bounds_min[0],
+            self.bounds_min[1],
+            self.bounds_min[2],
+            self.bounds_max[0],
+            self.bounds_max[1],
+            self.bounds_max[2]
+        )?;
+        writeln!(f, "degenerate:  {} zero-area triangles", self.degenerate_triangles)?;
+        write!(f, "skipped:     {} primitives", self.skipped_primitives.len())?;
+        for s in &self.skipped_primitives {
+            write!(f, "\n  - {s}")?;
+        }
+        Ok(())
+    }
+}
