@@ -2,7 +2,7 @@
 //! policies and the cost model.
 
 use glam::Vec3;
-use gridrt_grid::insert::{InsertMode, prepare, tri_box_overlap};
+use gridrt_grid::insert::{InsertMode, tri_box_overlap};
 use gridrt_grid::resolution::{self, CostModel, Resolution};
 use gridrt_grid::{BuildOptions, FlatGrid, GridGeometry, PhaseTimes, build_flat, triangle_bounds};
 use gridrt_scene::procedural::{self, SceneKind};

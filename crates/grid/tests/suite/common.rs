@@ -24,7 +24,7 @@ pub fn procedural_scenes() -> Vec<(String, procedural::Generated)> {
     vec![
         ("mountain".into(), procedural::generate(SceneKind::Mountain, 6, 1)),
         ("sphereflake".into(), procedural::sphereflake(1, 2)),
-        ("particles".into(), procedural::generate(SceneKind::Particles, 6000, 2)),
+        ("particles".into(), procedural::generate(SceneKind::Particles, 20_000, 2)),
         ("slivers".into(), procedural::generate(SceneKind::Slivers, 3000, 3)),
         ("teapot-in-stadium".into(), procedural::generate(SceneKind::TeapotInStadium, 1, 4)),
     ]

@@ -1,0 +1,200 @@
+//! Command-line definitions (clap). Every subcommand has `--help`.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use gridrt_grid::{CostModel, Resolution, Traversal};
+
+#[derive(Debug, Parser)]
+#[command(name = "gridrt", version, about = "Grid ray tracer and grid-structure laboratory", long_about = None)]
+pub struct Cli {
+    /// Worker threads for parallel builds and tracing (default: all cores).
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Load a scene and print its load report.
+    Info(InfoArgs),
+    /// Build a grid over a scene and print its size and build time per phase.
+    Build(BuildArgs),
+    /// Generate a procedural scene and write it as .glb.
+    Gen(GenArgs),
+    /// Generate a ray file (32 bytes per ray: f32 ox oy oz tmin dx dy dz tmax, little-endian).
+    Rays(RaysArgs),
+    /// Trace a ray file and write the closest hits (16 bytes per ray: f32 t, u32 triangle, f32 u, f32 v).
+    Trace(TraceArgs),
+}
+
+/// A scene: a .glb/.gltf path, or `@default` for the embedded default scene.
+#[derive(Debug, Args)]
+pub struct SceneArg {
+    /// Scene file (.glb or .gltf), or @default for the embedded default scene.
+    pub scene: String,
+}
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Grid kinds (`--grid`). Later structures join this list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GridKind {
+    /// Uniform grid, compact layout (Lagae & Dutré).
+    Flat,
+}
+
+/// Grid construction options shared by `build` and `trace`.
+#[derive(Debug, Args)]
+pub struct GridArgs {
+    /// Grid structure.
+    #[arg(long, value_enum, default_value = "flat")]
+    pub grid: GridKind,
+    /// Resolution: auto (cost-model guess-and-check), density=λ, point, line, m=N, or mx,my,mz.
+    #[arg(long, default_value = "auto", value_parser = parse_resolution)]
+    pub resolution: Resolution,
+    /// Insert triangles by exact triangle/box overlap instead of by bounding box.
+    #[arg(long)]
+    pub exact: bool,
+    /// Build on one thread (the result is identical to the parallel build).
+    #[arg(long)]
+    pub serial: bool,
+    /// Cost model Tsetup (survey §3.2).
+    #[arg(long, default_value_t = CostModel::default().t_setup)]
+    pub t_setup: f64,
+    /// Cost model Tstep.
+    #[arg(long, default_value_t = CostModel::default().t_step)]
+    pub t_step: f64,
+    /// Cost model Tinter.
+    #[arg(long, default_value_t = CostModel::default().t_inter)]
+    pub t_inter: f64,
+    /// Number of resolutions sampled by guess-and-check.
+    #[arg(long, default_value_t = CostModel::default().samples)]
+    pub samples: u32,
+}
+
+fn parse_resolution(s: &str) -> Result<Resolution, String> {
+    s.parse()
+}
+
+impl GridArgs {
+    pub fn cost_model(&self) -> anyhow::Result<CostModel> {
+        let m = CostModel { t_setup: self.t_setup, t_step: self.t_step, t_inter: self.t_inter, samples: self.samples, ..CostModel::default() };
+        anyhow::ensure!(
+            m.t_setup >= 0.0 && m.t_step > 0.0 && m.t_inter > 0.0 && m.t_step.is_finite() && m.t_inter.is_finite(),
+            "cost constants must be finite, Tstep and Tinter positive"
+        );
+        anyhow::ensure!((2..=256).contains(&m.samples), "--samples must be in 2..=256");
+        Ok(m)
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct BuildArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Print the result as JSON (includes the sampled cost curve).
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GenKind {
+    Mountain,
+    Sphereflake,
+    Particles,
+    Slivers,
+    TeapotInStadium,
+}
+
+#[derive(Debug, Args)]
+pub struct GenArgs {
+    /// Scene kind.
+    #[arg(value_enum)]
+    pub kind: GenKind,
+    /// Size parameter (meaning depends on the kind; see the printed summary). Default per kind.
+    #[arg(long)]
+    pub size: Option<u32>,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output .glb file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RayKind {
+    /// Origins uniform in the scene bounds (+10%), directions uniform on the sphere.
+    Random,
+    /// Primary rays of the auto-framed camera, 4:3, row-major.
+    Camera,
+    /// From one point (--origin, default the bounds centre) aimed at vertices, edge points and random directions.
+    Inside,
+}
+
+#[derive(Debug, Args)]
+pub struct RaysArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[arg(long, value_enum)]
+    pub kind: RayKind,
+    /// Number of rays.
+    #[arg(long, default_value_t = 100_000)]
+    pub count: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Origin for --kind inside, as x,y,z.
+    #[arg(long)]
+    pub origin: Option<String>,
+    /// Output ray file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// Grid traversal on the CPU (all threads).
+    Cpu,
+    /// Brute force over every triangle (the reference).
+    Brute,
+}
+
+#[derive(Debug, Args)]
+pub struct TraceArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    /// Input ray file.
+    #[arg(long)]
+    pub rays: PathBuf,
+    /// Output hits file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Traversal: aw (Amanatides–Woo), cw (Cleary–Wyvill), liu (Liu et al.), bresenham (incomplete: misses hits).
+    #[arg(long, default_value = "aw", value_parser = parse_traversal)]
+    pub traversal: Traversal,
+    /// Skip triangles this ray already tested (hashed per-ray mailbox).
+    #[arg(long)]
+    pub mailbox: bool,
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub backend: Backend,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_traversal(s: &str) -> Result<Traversal, String> {
+    s.parse()
+}
