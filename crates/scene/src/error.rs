@@ -74,13 +74,26 @@ pub enum SceneError {
         index: u32,
         vertex_count: usize,
     },
-    #[error("{source_name}: {at}, node {node}: vertex {vertex} is not finite: {value:?}")]
+    #[error("{source_name}: {at}{}: vertex {vertex} is not finite: {value:?}", node.map(|n| format!(", node {n}")).unwrap_or_default())]
     NonFiniteVertex {
+        source_name: String,
+        at: PrimitiveRef,
+        /// The node whose transform produced it; `None` when the file's own data is not finite.
+        node: Option<usize>,
+        vertex: usize,
+        value: [f32; 3],
+    },
+    #[error(
+        "{source_name}: {at}, node {node}: vertex {vertex} is {value:?}, beyond the supported \
+         magnitude {limit:e}"
+    )]
+    CoordinateOutOfRange {
         source_name: String,
         at: PrimitiveRef,
         node: usize,
         vertex: usize,
         value: [f32; 3],
+        limit: f32,
     },
     #[error("{source_name}: node {node}: {detail}")]
     InvalidNode { source_name: String, node: usize, detail: String },

@@ -34,6 +34,9 @@ pub const MAX_FILE_BYTES: u64 = 2 << 30;
 /// Largest number of triangles in one flattened scene (indices must fit in `u32` with room for
 /// the "no hit" marker `0xFFFF_FFFF`).
 pub const MAX_TRIANGLES: u64 = 1 << 28;
+/// Largest coordinate magnitude after transforms: keeps every extent and grid computation
+/// finite in f32 (extents up to 2e30, products of cell counts far from overflow).
+pub const MAX_COORDINATE: f32 = 1e30;
 /// Largest node depth (guards against hierarchies crafted to exhaust the stack).
 pub const MAX_NODE_DEPTH: usize = 256;
 
@@ -73,8 +76,9 @@ pub fn load_slice(
 ) -> Result<(Mesh, LoadReport), SceneError> {
     let name = source_name.to_string();
     precheck(bytes, &name)?;
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| map_gltf_error(e, &name))?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| map_gltf_error(e, &name))?;
     let doc = gltf.document;
+    validate(&doc, &name)?;
     precheck_external_buffers(&doc, base_dir, &name)?;
     let buffers =
         gltf::import_buffers(&doc, base_dir, gltf.blob).map_err(|e| map_gltf_error(e, &name))?;
@@ -156,6 +160,45 @@ fn precheck(bytes: &[u8], name: &str) -> Result<(), SceneError> {
             detail: format!("{} bytes, no glTF header or JSON object", bytes.len()),
         }),
     }
+}
+
+/// The `gltf` crate's validation (every index reference in range, required fields present),
+/// except that a POSITION accessor's missing `min`/`max` is tolerated: the spec requires them,
+/// but many exporters omit them and gridrt computes bounds itself.
+fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneError> {
+    use gltf::json::validation::{Error, Validate};
+    let root = doc.as_json();
+    // gltf-json 1.4's validator indexes `accessors[POSITION]` unchecked and panics on a dangling
+    // index: check those references first.
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            for (sem, acc) in &prim.attributes {
+                if acc.value() >= root.accessors.len() {
+                    return Err(SceneError::InvalidJson {
+                        source_name: name.into(),
+                        detail: format!(
+                            "meshes[{mi}].primitives[{pi}].attributes[{sem:?}]: accessor {} does not exist ({} accessors)",
+                            acc.value(),
+                            root.accessors.len()
+                        ),
+                    });
+                }
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, err| {
+        let p = path().to_string();
+        let min_max = p.ends_with(".min") || p.ends_with(".max");
+        if !(min_max && matches!(err, Error::Missing)) {
+            errors.push((p, err));
+        }
+    });
+    if errors.is_empty() {
+        return Ok(());
+    }
+    let detail = errors.iter().take(5).map(|(p, e)| format!("{p}: {e}")).collect::<Vec<_>>().join("; ");
+    Err(SceneError::InvalidJson { source_name: name.into(), detail })
 }
 
 fn precheck_external_buffers(
@@ -355,9 +398,19 @@ impl Loader<'_> {
                         return Err(SceneError::NonFiniteVertex {
                             source_name: self.name.clone(),
                             at: prim.at.clone(),
+                            node: Some(idx),
+                            vertex: vi,
+                            value: w.to_array(),
+                        });
+                    }
+                    if w.abs().max_element() > MAX_COORDINATE {
+                        return Err(SceneError::CoordinateOutOfRange {
+                            source_name: self.name.clone(),
+                            at: prim.at.clone(),
                             node: idx,
                             vertex: vi,
                             value: w.to_array(),
+                            limit: MAX_COORDINATE,
                         });
                     }
                     out.positions.push(w);
@@ -406,7 +459,7 @@ impl Loader<'_> {
                 return Err(SceneError::NonFiniteVertex {
                     source_name: self.name.clone(),
                     at,
-                    node: usize::MAX,
+                    node: None,
                     vertex: i,
                     value: p.to_array(),
                 });

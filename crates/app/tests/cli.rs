@@ -1,0 +1,106 @@
+//! End-to-end tests of the `gridrt` binary: every subcommand, the file formats between them,
+//! and clear failures on bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn gridrt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gridrt")).args(args).output().expect("running gridrt")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = gridrt(args);
+    assert!(out.status.success(), "gridrt {args:?} failed:\n{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn fails(args: &[&str], needle: &str) {
+    let out = gridrt(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "gridrt {args:?} should fail");
+    assert!(err.contains(needle), "gridrt {args:?}: stderr lacks \"{needle}\":\n{err}");
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gridrt-cli-test-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn pipeline_gen_info_build_rays_trace() {
+    let scene = tmp("tis.glb");
+    let out = ok(&["gen", "teapot-in-stadium", "--size", "1", "-o", s(&scene)]);
+    assert!(out.contains("1036 triangles"), "{out}");
+    let info = ok(&["info", s(&scene), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&info).unwrap();
+    assert_eq!(v["triangles"], 1036);
+
+    let build = ok(&["build", s(&scene), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&build).unwrap();
+    for key in ["resolution", "cells", "refs", "empty_percent", "memory_bytes", "build_ms", "cost_curve"] {
+        assert!(!v[key].is_null(), "build --json lacks {key}: {build}");
+    }
+    assert!(v["build_ms"]["count"].as_f64().is_some());
+    let text = ok(&["build", s(&scene), "--resolution", "10,20,30", "--exact", "--serial"]);
+    assert!(text.contains("10 x 20 x 30"), "{text}");
+
+    for kind in ["random", "camera", "inside"] {
+        let rays = tmp(&format!("{kind}.bin"));
+        ok(&["rays", s(&scene), "--kind", kind, "--count", "5000", "-o", s(&rays)]);
+        assert_eq!(std::fs::metadata(&rays).unwrap().len(), 5000 * 32);
+        let reference = tmp(&format!("{kind}-brute.hits"));
+        ok(&["trace", s(&scene), "--rays", s(&rays), "-o", s(&reference), "--backend", "brute"]);
+        let want = std::fs::read(&reference).unwrap();
+        assert_eq!(want.len(), 5000 * 16);
+        for traversal in ["aw", "cw", "liu"] {
+            for extra in [&[][..], &["--mailbox", "--exact"][..], &["--resolution", "m=7"][..]] {
+                let hits = tmp(&format!("{kind}-{traversal}.hits"));
+                let mut args = vec!["trace", s(&scene), "--rays", s(&rays), "-o", s(&hits), "--traversal", traversal];
+                args.extend_from_slice(extra);
+                let summary = ok(&args);
+                assert!(summary.contains("Mrays/s") && summary.contains("cells visited"), "{summary}");
+                assert!(std::fs::read(&hits).unwrap() == want, "{kind} {traversal} {extra:?}: hits differ from brute force");
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_inputs_fail_with_clear_messages() {
+    let scene = tmp("one.glb");
+    ok(&["gen", "particles", "--size", "50", "-o", s(&scene)]);
+    let bad = tmp("bad.bin");
+    std::fs::write(&bad, [0u8; 33]).unwrap();
+    fails(&["trace", s(&scene), "--rays", s(&bad), "-o", s(&tmp("x.hits"))], "not a multiple of 32");
+    let junk = tmp("junk.glb");
+    std::fs::write(&junk, b"hello world").unwrap();
+    fails(&["info", s(&junk)], "not a glTF file");
+    fails(&["info", s(&tmp("missing.glb"))], "missing.glb");
+    fails(&["build", s(&scene), "--resolution", "m=0"], "m must be");
+    fails(&["build", s(&scene), "--resolution", "bogus"], "bad resolution");
+    fails(&["trace", s(&scene), "--rays", s(&bad), "-o", "x", "--traversal", "zigzag"], "unknown traversal");
+    fails(&["build", s(&scene), "--t-step", "0"], "Tstep");
+}
+
+#[test]
+fn help_on_everything_and_default_scene() {
+    for sub in [&[][..], &["info"], &["build"], &["gen"], &["rays"], &["trace"]] {
+        let mut a = sub.to_vec();
+        a.push("--help");
+        let out = ok(&a);
+        assert!(out.contains("Usage"), "{a:?}: {out}");
+    }
+    let info = ok(&["info", "@default"]);
+    assert!(info.contains("embedded"), "{info}");
+}
+
+#[test]
+fn demo_runs_and_checks_itself() {
+    let out = ok(&[]);
+    assert!(out.contains("brute-force check: 2000 of 2000"), "{out}");
+}

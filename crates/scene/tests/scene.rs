@@ -1,0 +1,2 @@
+//! The scene crate's tests, in one binary (see suite/).
+mod suite;

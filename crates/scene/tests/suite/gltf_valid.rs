@@ -1,0 +1,137 @@
+//! Valid glTF: the triangle order contract, node transforms, strips and fans, non-indexed
+//! primitives, skipped modes, buffers embedded, external and in the GLB chunk, sparse accessors.
+
+use glam::Vec3;
+use gridrt_scene::gltf_load::{load_path, load_slice};
+use serde_json::json;
+
+use super::builder::{Doc, temp_dir};
+
+fn tri(p: Vec3) -> [[f32; 3]; 3] {
+    [p.to_array(), (p + Vec3::X).to_array(), (p + Vec3::Y).to_array()]
+}
+
+#[test]
+fn triangle_order_is_depth_first_document_order() {
+    // Nodes: 0 = root with mesh A and children [2, 1]; 1 = mesh B at +10y; 2 = no mesh, child 3;
+    // 3 = mesh B at +100z (child of 2, so visited before node 1); 4 = second root, mesh A.
+    let mut d = Doc::new();
+    let pa = d.positions(&tri(Vec3::ZERO));
+    let ma = d.mesh(pa, None, 4);
+    let pb = d.positions(&[tri(Vec3::ZERO), tri(Vec3::Z)].concat());
+    let ib = d.indices_u16(&[3, 4, 5, 0, 1, 2]);
+    let mb = d.mesh(pb, Some(ib), 4);
+    d.node(json!({"mesh": ma, "children": [2, 1]}));
+    d.node(json!({"mesh": mb, "translation": [0.0, 10.0, 0.0]}));
+    d.node(json!({"children": [3], "translation": [0.0, 0.0, 100.0]}));
+    d.node(json!({"mesh": mb, "scale": [2.0, 2.0, 2.0]}));
+    d.node(json!({"mesh": ma, "translation": [5.0, 0.0, 0.0]}));
+    d.root(0);
+    d.root(4);
+    let (mesh, report) = load_slice(&d.glb(), "order.glb", None).unwrap();
+    assert_eq!(report.triangles, 6);
+    let first = |i: usize| mesh.triangle(i)[0];
+    assert_eq!(first(0), Vec3::ZERO); // node 0, mesh A
+    assert_eq!(first(1), Vec3::new(0.0, 0.0, 102.0)); // node 3 (via 2): B's first triangle is the +z one, scaled 2
+    assert_eq!(first(2), Vec3::new(0.0, 0.0, 100.0));
+    assert_eq!(first(3), Vec3::new(0.0, 10.0, 1.0)); // node 1
+    assert_eq!(first(4), Vec3::new(0.0, 10.0, 0.0));
+    assert_eq!(first(5), Vec3::new(5.0, 0.0, 0.0)); // node 4
+    assert_eq!(mesh.triangle(2)[1], Vec3::new(2.0, 0.0, 100.0));
+}
+
+#[test]
+fn strips_fans_and_non_indexed_primitives() {
+    let pts: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, (i % 2) as f32, 0.0]).collect();
+    for (mode, expect) in [
+        (4u32, vec![[0u32, 1, 2], [3, 4, 5]]),
+        (5, vec![[0, 1, 2], [2, 1, 3], [2, 3, 4], [4, 3, 5]]),
+        (6, vec![[1, 2, 0], [2, 3, 0], [3, 4, 0], [4, 5, 0]]),
+    ] {
+        for indexed in [false, true] {
+            let mut d = Doc::new();
+            let p = d.positions(&pts);
+            let i = indexed.then(|| d.indices_u32(&[0, 1, 2, 3, 4, 5]));
+            let m = d.mesh(p, i, mode);
+            let n = d.node(json!({"mesh": m}));
+            d.root(n);
+            let (mesh, _) = load_slice(&d.glb(), "modes.glb", None).unwrap();
+            let got: Vec<[Vec3; 3]> = (0..mesh.triangle_count()).map(|t| mesh.triangle(t)).collect();
+            let want: Vec<[Vec3; 3]> = expect.iter().map(|t| t.map(|k| Vec3::from_array(pts[k as usize]))).collect();
+            assert_eq!(got, want, "mode {mode} indexed {indexed}");
+        }
+    }
+}
+
+#[test]
+fn other_modes_are_skipped_and_reported() {
+    let mut d = Doc::single_triangle();
+    let p = d.positions(&[[0.0; 3], [1.0, 1.0, 1.0]]);
+    let m = d.mesh(p, None, 1);
+    let n = d.node(json!({"mesh": m}));
+    d.root(n);
+    let (mesh, report) = load_slice(&d.glb(), "lines.glb", None).unwrap();
+    assert_eq!(mesh.triangle_count(), 1);
+    assert_eq!(report.skipped_primitives.len(), 1);
+    assert!(report.skipped_primitives[0].contains("Lines"), "{:?}", report.skipped_primitives);
+}
+
+#[test]
+fn embedded_external_and_glb_buffers_load_the_same() {
+    let make = || {
+        let mut d = Doc::new();
+        let p = d.positions(&[tri(Vec3::ZERO), tri(Vec3::ONE)].concat());
+        let i = d.indices_u16(&[0, 1, 2, 3, 4, 5]);
+        let m = d.mesh(p, Some(i), 4);
+        let n = d.node(json!({"mesh": m, "rotation": [0.0, 0.7071068, 0.0, 0.7071068]}));
+        d.root(n);
+        d
+    };
+    let (a, _) = load_slice(&make().glb(), "a.glb", None).unwrap();
+    let (b, _) = load_slice(&make().gltf_embedded(), "b.gltf", None).unwrap();
+    let dir = temp_dir("ext");
+    let (j, bin) = make().gltf_external("c.bin");
+    std::fs::write(dir.join("c.gltf"), j).unwrap();
+    std::fs::write(dir.join("c.bin"), bin).unwrap();
+    let (c, report) = load_path(&dir.join("c.gltf")).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(a, c);
+    assert_eq!(report.triangles, 2);
+    assert_eq!(report.degenerate_triangles, 0);
+}
+
+#[test]
+fn sparse_positions_and_default_scene_selection() {
+    let mut d = Doc::single_triangle();
+    // Sparse: replace vertex 2 by (0, 5, 0).
+    let idx = d.view(&2u16.to_le_bytes());
+    let vals = d.view(&[0f32, 5.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<_>>());
+    d.json["accessors"][0]["sparse"] = json!({"count": 1, "indices": {"bufferView": idx, "componentType": 5123}, "values": {"bufferView": vals}});
+    // Scene 1 is the default: it holds a second instance, translated.
+    d.json["nodes"].as_array_mut().unwrap().push(json!({"mesh": 0, "translation": [0.0, 0.0, 7.0]}));
+    d.json["scenes"].as_array_mut().unwrap().push(json!({"nodes": [1]}));
+    d.json["scene"] = json!(1);
+    let (mesh, _) = load_slice(&d.glb(), "sparse.glb", None).unwrap();
+    assert_eq!(mesh.triangle_count(), 1);
+    assert_eq!(mesh.triangle(0)[2], Vec3::new(0.0, 5.0, 7.0));
+}
+
+#[test]
+fn degenerate_triangles_are_kept_and_counted() {
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let i = d.indices_u16(&[0, 1, 2, 0, 1, 3, 1, 1, 3]);
+    let m = d.mesh(p, Some(i), 4);
+    let n = d.node(json!({"mesh": m}));
+    d.root(n);
+    let (mesh, report) = load_slice(&d.glb(), "degen.glb", None).unwrap();
+    assert_eq!(mesh.triangle_count(), 3);
+    assert_eq!(report.degenerate_triangles, 2);
+}
+
+#[test]
+fn embedded_default_scene_loads() {
+    let (mesh, report) = gridrt_scene::load_default();
+    assert!(mesh.triangle_count() > 1000);
+    assert_eq!(report.skipped_primitives.len(), 0);
+}
