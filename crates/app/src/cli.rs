@@ -87,7 +87,13 @@ fn parse_resolution(s: &str) -> Result<Resolution, String> {
 
 impl GridArgs {
     pub fn cost_model(&self) -> anyhow::Result<CostModel> {
-        let m = CostModel { t_setup: self.t_setup, t_step: self.t_step, t_inter: self.t_inter, samples: self.samples, ..CostModel::default() };
+        let m = CostModel {
+            t_setup: self.t_setup,
+            t_step: self.t_step,
+            t_inter: self.t_inter,
+            samples: self.samples,
+            ..CostModel::default()
+        };
         anyhow::ensure!(
             m.t_setup >= 0.0 && m.t_step > 0.0 && m.t_inter > 0.0 && m.t_step.is_finite() && m.t_inter.is_finite(),
             "cost constants must be finite, Tstep and Tinter positive"

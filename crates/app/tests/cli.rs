@@ -10,7 +10,12 @@ fn gridrt(args: &[&str]) -> Output {
 
 fn ok(args: &[&str]) -> String {
     let out = gridrt(args);
-    assert!(out.status.success(), "gridrt {args:?} failed:\n{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "gridrt {args:?} failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8(out.stdout).unwrap()
 }
 
@@ -64,7 +69,10 @@ fn pipeline_gen_info_build_rays_trace() {
                 args.extend_from_slice(extra);
                 let summary = ok(&args);
                 assert!(summary.contains("Mrays/s") && summary.contains("cells visited"), "{summary}");
-                assert!(std::fs::read(&hits).unwrap() == want, "{kind} {traversal} {extra:?}: hits differ from brute force");
+                assert!(
+                    std::fs::read(&hits).unwrap() == want,
+                    "{kind} {traversal} {extra:?}: hits differ from brute force"
+                );
             }
         }
     }

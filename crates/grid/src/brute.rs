@@ -14,10 +14,10 @@ pub fn trace(tris: &[[Vec3; 3]], ray: &Ray) -> (Hit, RayStats) {
     };
     let mut best = Hit::MISS;
     for (i, tri) in tris.iter().enumerate() {
-        if let Some(h) = intersect(&r, tri) {
-            if closer(h.t, i as u32, best.t, best.triangle) {
-                best = Hit { t: h.t, triangle: i as u32, u: h.u, v: h.v };
-            }
+        if let Some(h) = intersect(&r, tri)
+            && closer(h.t, i as u32, best.t, best.triangle)
+        {
+            best = Hit { t: h.t, triangle: i as u32, u: h.u, v: h.v };
         }
     }
     (best, RayStats { cells: 0, tests: tris.len() as u32 })

@@ -95,7 +95,12 @@ impl FlatGrid {
     }
 
     /// Builds the grid `geom` over `tris`. Timings are appended to `times`.
-    pub fn build(tris: &[[Vec3; 3]], geom: GridGeometry, opts: BuildOptions, times: &mut PhaseTimes) -> Result<FlatGrid, BuildError> {
+    pub fn build(
+        tris: &[[Vec3; 3]],
+        geom: GridGeometry,
+        opts: BuildOptions,
+        times: &mut PhaseTimes,
+    ) -> Result<FlatGrid, BuildError> {
         if tris.len() as u64 >= u32::MAX as u64 {
             return Err(BuildError::TooManyTriangles(tris.len() as u64));
         }
@@ -122,7 +127,12 @@ fn prefix_sum(counts: impl Iterator<Item = u32>, cells: usize) -> Result<Vec<u32
     Ok(start)
 }
 
-fn build_serial(tris: &[[Vec3; 3]], geom: GridGeometry, mode: InsertMode, times: &mut PhaseTimes) -> Result<FlatGrid, BuildError> {
+fn build_serial(
+    tris: &[[Vec3; 3]],
+    geom: GridGeometry,
+    mode: InsertMode,
+    times: &mut PhaseTimes,
+) -> Result<FlatGrid, BuildError> {
     let cells = geom.cell_count() as usize;
     let mut counts = vec![0u32; cells];
     times.record("count", || {
@@ -154,7 +164,12 @@ mod parallel {
 
     use super::*;
 
-    pub(super) fn build(tris: &[[Vec3; 3]], geom: GridGeometry, mode: InsertMode, times: &mut PhaseTimes) -> Result<FlatGrid, BuildError> {
+    pub(super) fn build(
+        tris: &[[Vec3; 3]],
+        geom: GridGeometry,
+        mode: InsertMode,
+        times: &mut PhaseTimes,
+    ) -> Result<FlatGrid, BuildError> {
         let cells = geom.cell_count() as usize;
         let counts: Vec<AtomicU32> = times.record("count", || {
             let counts: Vec<AtomicU32> = (0..cells).into_par_iter().map(|_| AtomicU32::new(0)).collect();
@@ -188,7 +203,9 @@ mod parallel {
             while cell < cells {
                 let first = cell;
                 let base = cell_start[first];
-                while cell < cells && (cell_start[cell + 1] - base) as usize <= target.max((cell_start[first + 1] - base) as usize) {
+                while cell < cells
+                    && (cell_start[cell + 1] - base) as usize <= target.max((cell_start[first + 1] - base) as usize)
+                {
                     cell += 1;
                 }
                 let len = (cell_start[cell] - base) as usize;

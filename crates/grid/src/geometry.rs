@@ -110,7 +110,7 @@ impl GridGeometry {
                 t1 = hi;
             }
         }
-        if !(t0 <= t1) || !t0.is_finite() || !t1.is_finite() {
+        if !t0.is_finite() || !t1.is_finite() || t0 > t1 {
             return None;
         }
         Some(GridRay { o, d, inv_d, t0, t1 })

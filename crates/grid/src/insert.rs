@@ -56,7 +56,10 @@ pub fn for_each_cell(geom: &GridGeometry, g: &GridTriangle, mode: InsertMode, mu
         for y in g.lo.y..=g.hi.y {
             for x in g.lo.x..=g.hi.x {
                 let c = UVec3::new(x, y, z);
-                if mode == InsertMode::Exact && !single && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + INSERT_MARGIN_CELLS) {
+                if mode == InsertMode::Exact
+                    && !single
+                    && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + INSERT_MARGIN_CELLS)
+                {
                     continue;
                 }
                 f(geom.cell_index(c));

@@ -32,7 +32,9 @@ pub use traversal::Traversal;
 pub enum BuildError {
     #[error("{0} triangles: a grid indexes at most 2^32 - 2")]
     TooManyTriangles(u64),
-    #[error("the grid would hold {refs} triangle references, more than the limit of {limit}; lower the resolution or use bounding-box-free exact insertion")]
+    #[error(
+        "the grid would hold {refs} triangle references, more than the limit of {limit}; lower the resolution or use bounding-box-free exact insertion"
+    )]
     TooManyReferences { refs: u64, limit: u64 },
 }
 
@@ -51,7 +53,8 @@ pub fn build_flat(
 ) -> Result<(FlatGrid, ResolutionChoice, PhaseTimes), BuildError> {
     let mut times = PhaseTimes::default();
     let bounds = times.record("bounds", || triangle_bounds(tris));
-    let choice = times.record("resolution", || resolution::choose(tris, &bounds, policy, model, opts.insert, opts.parallel));
+    let choice =
+        times.record("resolution", || resolution::choose(tris, &bounds, policy, model, opts.insert, opts.parallel));
     let geom = GridGeometry::new(&bounds, choice.resolution);
     let grid = FlatGrid::build(tris, geom, opts, &mut times)?;
     Ok((grid, choice, times))

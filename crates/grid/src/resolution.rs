@@ -44,7 +44,14 @@ pub struct CostModel {
 impl Default for CostModel {
     /// The survey's example constants (§3.3): Tsetup ≈ 1.0, Tstep ≈ 0.1, Tinter ≈ 0.5.
     fn default() -> CostModel {
-        CostModel { t_setup: 1.0, t_step: 0.1, t_inter: 0.5, samples: 24, max_cells_per_triangle: 64.0, max_cells: 1 << 26 }
+        CostModel {
+            t_setup: 1.0,
+            t_step: 0.1,
+            t_inter: 0.5,
+            samples: 24,
+            max_cells_per_triangle: 64.0,
+            max_cells: 1 << 26,
+        }
     }
 }
 
@@ -96,7 +103,11 @@ impl std::str::FromStr for Resolution {
         }
         if let Some(v) = s.strip_prefix("m=") {
             let m: u32 = v.parse().map_err(|_| bad())?;
-            return if (1..=MAX_AXIS_RES).contains(&m) { Ok(Resolution::Cubic(m)) } else { Err(format!("m must be in 1..={MAX_AXIS_RES}")) };
+            return if (1..=MAX_AXIS_RES).contains(&m) {
+                Ok(Resolution::Cubic(m))
+            } else {
+                Err(format!("m must be in 1..={MAX_AXIS_RES}"))
+            };
         }
         let parts: Vec<&str> = s.split(',').collect();
         if parts.len() == 3 {
@@ -169,7 +180,14 @@ pub fn count_refs(tris: &[[Vec3; 3]], bounds: &Aabb, res: [u32; 3], mode: Insert
 }
 
 /// Chooses the resolution for `tris` within `bounds`.
-pub fn choose(tris: &[[Vec3; 3]], bounds: &Aabb, policy: Resolution, model: &CostModel, mode: InsertMode, parallel: bool) -> ResolutionChoice {
+pub fn choose(
+    tris: &[[Vec3; 3]],
+    bounds: &Aabb,
+    policy: Resolution,
+    model: &CostModel,
+    mode: InsertMode,
+    parallel: bool,
+) -> ResolutionChoice {
     let n = tris.len().max(1) as f64;
     let r = model.t_inter / model.t_step;
     let cap = model.cell_cap(tris.len()) as f64;
@@ -190,7 +208,13 @@ pub fn choose(tris: &[[Vec3; 3]], bounds: &Aabb, policy: Resolution, model: &Cos
 
 /// T(m) sampled at `model.samples` geometrically spaced m in [m_point, m_line] (capped by
 /// memory), distinct resolutions only, in increasing m.
-pub fn sample_curve(tris: &[[Vec3; 3]], bounds: &Aabb, model: &CostModel, mode: InsertMode, parallel: bool) -> Vec<CostSample> {
+pub fn sample_curve(
+    tris: &[[Vec3; 3]],
+    bounds: &Aabb,
+    model: &CostModel,
+    mode: InsertMode,
+    parallel: bool,
+) -> Vec<CostSample> {
     let n = tris.len().max(1) as f64;
     let r = model.t_inter / model.t_step;
     let m_lo = (2.0 * r * n).cbrt().max(1.0);
@@ -206,7 +230,14 @@ pub fn sample_curve(tris: &[[Vec3; 3]], bounds: &Aabb, model: &CostModel, mode: 
         let cells = res.iter().map(|&x| x as u64).product::<u64>();
         let n_m = count_refs(tris, bounds, res, mode, parallel);
         let mg = (cells as f64).cbrt();
-        out.push(CostSample { m: mg, resolution: res, cells, n_m, mu: n_m as f64 / (mg * mg), cost: model.cost(cells, n_m) });
+        out.push(CostSample {
+            m: mg,
+            resolution: res,
+            cells,
+            n_m,
+            mu: n_m as f64 / (mg * mg),
+            cost: model.cost(cells, n_m),
+        });
     }
     out
 }

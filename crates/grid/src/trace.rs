@@ -65,10 +65,10 @@ fn closest_hit(
                 continue;
             }
             stats.tests += 1;
-            if let Some(h) = intersect(pr, &tris[tri as usize]) {
-                if closer(h.t, tri, best.t, best.triangle) {
-                    best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
-                }
+            if let Some(h) = intersect(pr, &tris[tri as usize])
+                && closer(h.t, tri, best.t, best.triangle)
+            {
+                best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
             }
         }
         if best.t < step.t_exit {

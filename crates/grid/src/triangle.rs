@@ -39,7 +39,12 @@ impl PreparedRay {
     pub fn new(ray: &Ray) -> Option<PreparedRay> {
         let org = ray.o();
         let dir = ray.d();
-        if !org.is_finite() || !dir.is_finite() || dir == Vec3::ZERO || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax
+        if !org.is_finite()
+            || !dir.is_finite()
+            || dir == Vec3::ZERO
+            || ray.tmin.is_nan()
+            || ray.tmax.is_nan()
+            || ray.tmin > ray.tmax
         {
             return None;
         }
@@ -59,7 +64,18 @@ impl PreparedRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / dir[kz];
-        Some(PreparedRay { org, dir, tmin: ray.tmin, tmax: ray.tmax, kx, ky, kz, sx: dir[kx] * sz, sy: dir[ky] * sz, sz })
+        Some(PreparedRay {
+            org,
+            dir,
+            tmin: ray.tmin,
+            tmax: ray.tmax,
+            kx,
+            ky,
+            kz,
+            sx: dir[kx] * sz,
+            sy: dir[ky] * sz,
+            sz,
+        })
     }
 }
 

@@ -49,13 +49,7 @@ pub enum SceneError {
         detail: String,
     },
     #[error("{source_name}: {at}: accessor {accessor} ({semantic}) is invalid: {detail}")]
-    InvalidAccessor {
-        source_name: String,
-        at: PrimitiveRef,
-        accessor: usize,
-        semantic: &'static str,
-        detail: String,
-    },
+    InvalidAccessor { source_name: String, at: PrimitiveRef, accessor: usize, semantic: &'static str, detail: String },
     #[error(
         "{source_name}: {at}: POSITION accessor {accessor} has {found} components; gridrt needs \
          32-bit float VEC3 positions"
@@ -67,13 +61,7 @@ pub enum SceneError {
         "{source_name}: {at}: index {index_position} is {index}, but the primitive has only \
          {vertex_count} vertices"
     )]
-    IndexOutOfRange {
-        source_name: String,
-        at: PrimitiveRef,
-        index_position: usize,
-        index: u32,
-        vertex_count: usize,
-    },
+    IndexOutOfRange { source_name: String, at: PrimitiveRef, index_position: usize, index: u32, vertex_count: usize },
     #[error("{source_name}: {at}{}: vertex {vertex} is not finite: {value:?}", node.map(|n| format!(", node {n}")).unwrap_or_default())]
     NonFiniteVertex {
         source_name: String,
@@ -113,8 +101,6 @@ pub enum RayFileError {
         #[source]
         err: std::io::Error,
     },
-    #[error(
-        "{source_name}: size {len} bytes is not a multiple of {record} bytes (one {what} record)"
-    )]
+    #[error("{source_name}: size {len} bytes is not a multiple of {record} bytes (one {what} record)")]
     BadSize { source_name: String, len: u64, record: usize, what: &'static str },
 }

@@ -36,10 +36,10 @@ pub fn to_glb(mesh: &Mesh, generator: &str) -> Vec<u8> {
         ]
     });
     let mut json = serde_json::to_vec(&json).expect("JSON of plain values always serialises");
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     assemble_glb(&json, Some(&bin))

@@ -69,19 +69,14 @@ fn read_file_bounded(path: &Path, name: &str) -> Result<Vec<u8>, SceneError> {
 
 /// Loads glTF from memory. `source_name` is used in errors and the report; `base_dir` resolves
 /// external buffer URIs (`None`: only embedded data and the GLB chunk are allowed).
-pub fn load_slice(
-    bytes: &[u8],
-    source_name: &str,
-    base_dir: Option<&Path>,
-) -> Result<(Mesh, LoadReport), SceneError> {
+pub fn load_slice(bytes: &[u8], source_name: &str, base_dir: Option<&Path>) -> Result<(Mesh, LoadReport), SceneError> {
     let name = source_name.to_string();
     precheck(bytes, &name)?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| map_gltf_error(e, &name))?;
     let doc = gltf.document;
     validate(&doc, &name)?;
     precheck_external_buffers(&doc, base_dir, &name)?;
-    let buffers =
-        gltf::import_buffers(&doc, base_dir, gltf.blob).map_err(|e| map_gltf_error(e, &name))?;
+    let buffers = gltf::import_buffers(&doc, base_dir, gltf.blob).map_err(|e| map_gltf_error(e, &name))?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|d| &d.0[..]).collect();
     Loader { name, doc: &doc, buffers }.load()
 }
@@ -126,10 +121,7 @@ fn precheck(bytes: &[u8], name: &str) -> Result<(), SceneError> {
             if o + 8 + len > declared {
                 return Err(SceneError::TruncatedGlb {
                     source_name: name.into(),
-                    detail: format!(
-                        "chunk at byte {o} declares {len} bytes, only {} remain",
-                        declared - o - 8
-                    ),
+                    detail: format!("chunk at byte {o} declares {len} bytes, only {} remain", declared - o - 8),
                 });
             }
             if first && kind != 0x4E4F_534A {
@@ -142,10 +134,7 @@ fn precheck(bytes: &[u8], name: &str) -> Result<(), SceneError> {
             o += 8 + len;
         }
         if first {
-            return Err(SceneError::InvalidGlb {
-                source_name: name.into(),
-                detail: "no JSON chunk".into(),
-            });
+            return Err(SceneError::InvalidGlb { source_name: name.into(), detail: "no JSON chunk".into() });
         }
         return Ok(());
     }
@@ -201,11 +190,7 @@ fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneError> {
     Err(SceneError::InvalidJson { source_name: name.into(), detail })
 }
 
-fn precheck_external_buffers(
-    doc: &gltf::Document,
-    base_dir: Option<&Path>,
-    name: &str,
-) -> Result<(), SceneError> {
+fn precheck_external_buffers(doc: &gltf::Document, base_dir: Option<&Path>, name: &str) -> Result<(), SceneError> {
     for buffer in doc.buffers() {
         if let gltf::buffer::Source::Uri(uri) = buffer.source() {
             if uri.starts_with("data:") {
@@ -254,16 +239,9 @@ fn map_gltf_error(e: gltf::Error, name: &str) -> SceneError {
     let name = name.to_string();
     match e {
         gltf::Error::Binary(b) => SceneError::InvalidGlb { source_name: name, detail: b.to_string() },
-        gltf::Error::Deserialize(j) => {
-            SceneError::InvalidJson { source_name: name, detail: j.to_string() }
-        }
+        gltf::Error::Deserialize(j) => SceneError::InvalidJson { source_name: name, detail: j.to_string() },
         gltf::Error::Validation(list) => {
-            let detail = list
-                .iter()
-                .take(5)
-                .map(|(path, err)| format!("{path}: {err}"))
-                .collect::<Vec<_>>()
-                .join("; ");
+            let detail = list.iter().take(5).map(|(path, err)| format!("{path}: {err}")).collect::<Vec<_>>().join("; ");
             SceneError::InvalidJson { source_name: name, detail }
         }
         gltf::Error::BufferLength { buffer, expected, actual } => SceneError::Buffer {
@@ -276,11 +254,9 @@ fn map_gltf_error(e: gltf::Error, name: &str) -> SceneError {
             buffer: 0,
             detail: "refers to the .glb BIN chunk, which is missing".into(),
         },
-        gltf::Error::Base64(err) => SceneError::Buffer {
-            source_name: name,
-            buffer: 0,
-            detail: format!("bad base64 data URI: {err}"),
-        },
+        gltf::Error::Base64(err) => {
+            SceneError::Buffer { source_name: name, buffer: 0, detail: format!("bad base64 data URI: {err}") }
+        }
         gltf::Error::Io(err) => SceneError::Io { source_name: name, err },
         other => SceneError::Unsupported { source_name: name, detail: other.to_string() },
     }
@@ -505,10 +481,9 @@ impl Loader<'_> {
         offset: usize,
         count: usize,
         elem: usize,
-        at: &PrimitiveRef,
-        accessor: usize,
-        semantic: &'static str,
+        ctx: AccessorCtx<'_>,
     ) -> Result<(&[u8], usize), SceneError> {
+        let AccessorCtx { at, accessor, semantic } = ctx;
         let oob = |detail: String| SceneError::AccessorOutOfBounds {
             source_name: self.name.clone(),
             at: at.clone(),
@@ -569,8 +544,13 @@ impl Loader<'_> {
         };
         let mut out = match acc.view() {
             Some(view) => {
-                let (bytes, stride) =
-                    self.element_bytes(&view, acc.offset(), count, 12, at, acc.index(), "POSITION")?;
+                let (bytes, stride) = self.element_bytes(
+                    &view,
+                    acc.offset(),
+                    count,
+                    12,
+                    AccessorCtx { at, accessor: acc.index(), semantic: "POSITION" },
+                )?;
                 (0..count).map(|i| read3(&bytes[i * stride..])).collect()
             }
             // No buffer view: the spec says the data is all zeros (sparse may replace some).
@@ -598,13 +578,16 @@ impl Loader<'_> {
                 idx_info.offset(),
                 n,
                 isize,
-                at,
-                acc.index(),
-                "POSITION sparse indices",
+                AccessorCtx { at, accessor: acc.index(), semantic: "POSITION sparse indices" },
             )?;
             let vals = sparse.values();
-            let (vb, _) =
-                self.element_bytes(&vals.view(), vals.offset(), n, 12, at, acc.index(), "POSITION sparse values")?;
+            let (vb, _) = self.element_bytes(
+                &vals.view(),
+                vals.offset(),
+                n,
+                12,
+                AccessorCtx { at, accessor: acc.index(), semantic: "POSITION sparse values" },
+            )?;
             for k in 0..n {
                 let target = read_uint(&ib[k * isize..], isize) as usize;
                 if target >= count {
@@ -657,9 +640,23 @@ impl Loader<'_> {
         let Some(view) = acc.view() else {
             return Ok(vec![0; count]);
         };
-        let (bytes, stride) = self.element_bytes(&view, acc.offset(), count, size, at, acc.index(), "indices")?;
+        let (bytes, stride) = self.element_bytes(
+            &view,
+            acc.offset(),
+            count,
+            size,
+            AccessorCtx { at, accessor: acc.index(), semantic: "indices" },
+        )?;
         Ok((0..count).map(|i| read_uint(&bytes[i * stride..], size)).collect())
     }
+}
+
+/// Which accessor a byte range belongs to, for error messages.
+#[derive(Clone, Copy)]
+struct AccessorCtx<'a> {
+    at: &'a PrimitiveRef,
+    accessor: usize,
+    semantic: &'static str,
 }
 
 fn read_uint(b: &[u8], size: usize) -> u32 {

@@ -24,8 +24,13 @@ pub enum SceneKind {
 }
 
 impl SceneKind {
-    pub const ALL: [SceneKind; 5] =
-        [SceneKind::Mountain, SceneKind::Sphereflake, SceneKind::Particles, SceneKind::Slivers, SceneKind::TeapotInStadium];
+    pub const ALL: [SceneKind; 5] = [
+        SceneKind::Mountain,
+        SceneKind::Sphereflake,
+        SceneKind::Particles,
+        SceneKind::Slivers,
+        SceneKind::TeapotInStadium,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -90,7 +95,7 @@ pub fn fractal_mountain(levels: u32, seed: u64) -> Mesh {
         }
         // Square step: edge midpoints, averaging the neighbours that exist.
         for y in (0..n).step_by(half) {
-            let x0 = if (y / half) % 2 == 0 { half } else { 0 };
+            let x0 = if (y / half).is_multiple_of(2) { half } else { 0 };
             for x in (x0..n).step_by(step) {
                 let mut sum = 0.0;
                 let mut cnt = 0.0;
@@ -199,8 +204,8 @@ fn transformed(m: &Mesh, f: impl Fn(Vec3) -> Vec3) -> Mesh {
 /// an icosphere with `subdiv` subdivisions. `inside_points` are the sphere centres.
 pub fn sphereflake(levels: u32, subdiv: u32) -> Generated {
     let unit = icosphere(subdiv);
-    let mut mesh = Mesh::default();
-    let mut centers = Vec::new();
+    let mesh = Mesh::default();
+    let centers = Vec::new();
     // Child directions in the parent's frame (up = +y), as in the SPD's sphereflake.
     let mut dirs = Vec::new();
     for i in 0..6 {
@@ -212,32 +217,33 @@ pub fn sphereflake(levels: u32, subdiv: u32) -> Generated {
         let el = 50f32.to_radians();
         dirs.push(Vec3::new(a.cos() * el.cos(), el.sin(), a.sin() * el.cos()));
     }
-    fn rec(
-        c: Vec3,
-        r: f32,
-        frame: Mat3,
-        level: u32,
-        unit: &Mesh,
-        dirs: &[Vec3],
-        mesh: &mut Mesh,
-        centers: &mut Vec<Vec3>,
-    ) {
-        mesh.append(&transformed(unit, |p| c + p * r));
-        centers.push(c);
-        if level == 0 {
-            return;
-        }
-        let cr = r / 3.0;
-        for d in dirs {
-            let dw = (frame * *d).normalize();
-            // Child frame: its up axis points away from the parent.
-            let side = if dw.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
-            let x = side.cross(dw).normalize();
-            let z = x.cross(dw);
-            rec(c + dw * (r + cr), cr, Mat3::from_cols(x, dw, z), level - 1, unit, dirs, mesh, centers);
+    struct Flake<'a> {
+        unit: &'a Mesh,
+        dirs: &'a [Vec3],
+        mesh: Mesh,
+        centers: Vec<Vec3>,
+    }
+    impl Flake<'_> {
+        fn sphere(&mut self, c: Vec3, r: f32, frame: Mat3, level: u32) {
+            self.mesh.append(&transformed(self.unit, |p| c + p * r));
+            self.centers.push(c);
+            if level == 0 {
+                return;
+            }
+            let cr = r / 3.0;
+            for i in 0..self.dirs.len() {
+                let dw = (frame * self.dirs[i]).normalize();
+                // Child frame: its up axis points away from the parent.
+                let side = if dw.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+                let x = side.cross(dw).normalize();
+                let z = x.cross(dw);
+                self.sphere(c + dw * (r + cr), cr, Mat3::from_cols(x, dw, z), level - 1);
+            }
         }
     }
-    rec(Vec3::ZERO, 1.0, Mat3::IDENTITY, levels, &unit, &dirs, &mut mesh, &mut centers);
+    let mut flake = Flake { unit: &unit, dirs: &dirs, mesh, centers };
+    flake.sphere(Vec3::ZERO, 1.0, Mat3::IDENTITY, levels);
+    let (mesh, centers) = (flake.mesh, flake.centers);
     Generated { mesh, inside_points: centers }
 }
 
@@ -322,7 +328,13 @@ pub fn teapot_in_stadium(size: u32) -> Generated {
 /// Closed axis-aligned box, 12 triangles.
 pub fn box_mesh(lo: Vec3, hi: Vec3) -> Mesh {
     let positions = (0..8)
-        .map(|i| Vec3::new(if i & 1 != 0 { hi.x } else { lo.x }, if i & 2 != 0 { hi.y } else { lo.y }, if i & 4 != 0 { hi.z } else { lo.z }))
+        .map(|i| {
+            Vec3::new(
+                if i & 1 != 0 { hi.x } else { lo.x },
+                if i & 2 != 0 { hi.y } else { lo.y },
+                if i & 4 != 0 { hi.z } else { lo.z },
+            )
+        })
         .collect();
     let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
     let indices = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();

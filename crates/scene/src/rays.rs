@@ -68,7 +68,7 @@ impl Hit {
 
 fn records_from_le<T: Pod>(bytes: &[u8], name: &str, what: &'static str) -> Result<Vec<T>, RayFileError> {
     let record = std::mem::size_of::<T>();
-    if bytes.len() % record != 0 {
+    if !bytes.len().is_multiple_of(record) {
         return Err(RayFileError::BadSize { source_name: name.into(), len: bytes.len() as u64, record, what });
     }
     // Every field is 4 bytes: decode each word little-endian so the format is the same on

@@ -11,7 +11,8 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     let Built { grid, choice, times, options } = build_grid(&tris, &args.grid)?;
     let stats = grid.stats(tris.len());
     if args.json {
-        let phases: serde_json::Map<String, serde_json::Value> = times.0.iter().map(|(k, v)| (k.clone(), json!(v))).collect();
+        let phases: serde_json::Map<String, serde_json::Value> =
+            times.0.iter().map(|(k, v)| (k.clone(), json!(v))).collect();
         let out = json!({
             "scene": report.source,
             "triangles": tris.len(),
@@ -37,12 +38,26 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     println!("scene:        {} ({} triangles)", report.source, tris.len());
-    println!("grid:         flat, {:?} insertion, {}", options.insert, if options.parallel { "parallel" } else { "serial" });
-    println!("resolution:   {} x {} x {} ({:?})", stats.resolution[0], stats.resolution[1], stats.resolution[2], choice.policy);
+    println!(
+        "grid:         flat, {:?} insertion, {}",
+        options.insert,
+        if options.parallel { "parallel" } else { "serial" }
+    );
+    println!(
+        "resolution:   {} x {} x {} ({:?})",
+        stats.resolution[0], stats.resolution[1], stats.resolution[2], choice.policy
+    );
     println!("cells:        {}", stats.cells);
-    println!("refs:         {} ({:.2} per triangle, max {} in one cell)", stats.refs, stats.refs_per_triangle, stats.max_refs_per_cell);
+    println!(
+        "refs:         {} ({:.2} per triangle, max {} in one cell)",
+        stats.refs, stats.refs_per_triangle, stats.max_refs_per_cell
+    );
     println!("empty cells:  {} ({:.1}%)", stats.empty_cells, stats.empty_percent);
-    println!("memory:       {} ({:.1} bytes per triangle)", human_bytes(stats.memory_bytes), stats.memory_bytes as f64 / tris.len() as f64);
+    println!(
+        "memory:       {} ({:.1} bytes per triangle)",
+        human_bytes(stats.memory_bytes),
+        stats.memory_bytes as f64 / tris.len() as f64
+    );
     let phases: Vec<String> = times.0.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();
     println!("build ms:     {:.2} total ({})", times.total(), phases.join(", "));
     if !choice.curve.is_empty() {

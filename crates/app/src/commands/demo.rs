@@ -16,7 +16,12 @@ pub fn run() -> anyhow::Result<()> {
     println!("gridrt demo: the embedded default scene (see `gridrt --help` for the commands)\n");
     println!("{report}\n");
     let tris = mesh.triangles();
-    let (grid, choice, times) = build_flat(&tris, Resolution::Auto, &CostModel::default(), BuildOptions { insert: InsertMode::BoundingBox, parallel: true })?;
+    let (grid, choice, times) = build_flat(
+        &tris,
+        Resolution::Auto,
+        &CostModel::default(),
+        BuildOptions { insert: InsertMode::BoundingBox, parallel: true },
+    )?;
     let st = grid.stats(tris.len());
     println!(
         "flat grid {}x{}x{} chosen by the cost model over {} samples: {} refs, {:.1}% empty, {}, built in {:.1} ms",
@@ -30,7 +35,8 @@ pub fn run() -> anyhow::Result<()> {
         times.total()
     );
     let b = mesh.bounds();
-    let sets = [("primary", camera_rays(&Camera::fit(&b, 4.0 / 3.0), 200_000)), ("random", random_rays(&b, 200_000, 1))];
+    let sets =
+        [("primary", camera_rays(&Camera::fit(&b, 4.0 / 3.0), 200_000)), ("random", random_rays(&b, 200_000, 1))];
     println!("\n{:<8} {:<10} {:>10} {:>12} {:>12}", "rays", "traversal", "Mrays/s", "cells/ray", "tests/ray");
     for (name, rays) in &sets {
         for traversal in Traversal::EXACT {
@@ -38,7 +44,12 @@ pub fn run() -> anyhow::Result<()> {
             let start = Instant::now();
             let (_, s) = trace_batch(rays, true, |r| trace_flat(&grid, &tris, r, opts));
             let mrays = s.rays as f64 / start.elapsed().as_secs_f64() / 1e6;
-            println!("{name:<8} {:<10} {mrays:>10.2} {:>12.2} {:>12.2}", traversal.short_name(), s.mean_cells(), s.mean_tests());
+            println!(
+                "{name:<8} {:<10} {mrays:>10.2} {:>12.2} {:>12.2}",
+                traversal.short_name(),
+                s.mean_cells(),
+                s.mean_tests()
+            );
         }
     }
     // Spot check against the reference.

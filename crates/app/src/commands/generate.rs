@@ -16,7 +16,10 @@ pub fn run(args: GenArgs) -> anyhow::Result<()> {
     let (meaning, default) = kind.size_help();
     let size = args.size.unwrap_or(default);
     let g = procedural::generate(kind, size, args.seed);
-    let bytes = gridrt_scene::glb_write::to_glb(&g.mesh, &format!("gridrt gen {} --size {size} --seed {}", kind.name(), args.seed));
+    let bytes = gridrt_scene::glb_write::to_glb(
+        &g.mesh,
+        &format!("gridrt gen {} --size {size} --seed {}", kind.name(), args.seed),
+    );
     std::fs::write(&args.output, &bytes).with_context(|| format!("writing {}", args.output.display()))?;
     println!(
         "{}: size {size} ({meaning}), {} triangles, {} vertices -> {} ({} bytes)",

@@ -33,9 +33,13 @@ pub struct Built {
 }
 
 pub fn build_grid(tris: &[[Vec3; 3]], args: &GridArgs) -> anyhow::Result<Built> {
-    let options = BuildOptions { insert: if args.exact { InsertMode::Exact } else { InsertMode::BoundingBox }, parallel: !args.serial };
+    let options = BuildOptions {
+        insert: if args.exact { InsertMode::Exact } else { InsertMode::BoundingBox },
+        parallel: !args.serial,
+    };
     let model = args.cost_model()?;
-    let (grid, choice, times) = gridrt_grid::build_flat(tris, args.resolution, &model, options).context("building the grid")?;
+    let (grid, choice, times) =
+        gridrt_grid::build_flat(tris, args.resolution, &model, options).context("building the grid")?;
     Ok(Built { grid, choice, times, options })
 }
 

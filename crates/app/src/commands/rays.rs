@@ -28,7 +28,11 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
 }
 
 fn parse_vec3(s: &str) -> anyhow::Result<Vec3> {
-    let v: Vec<f32> = s.split(',').map(|x| x.trim().parse::<f32>()).collect::<Result<_, _>>().with_context(|| format!("bad point \"{s}\""))?;
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("bad point \"{s}\""))?;
     anyhow::ensure!(v.len() == 3 && v.iter().all(|x| x.is_finite()), "expected x,y,z, got \"{s}\"");
     Ok(Vec3::new(v[0], v[1], v[2]))
 }

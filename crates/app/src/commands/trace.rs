@@ -46,7 +46,14 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     print_summary(&args, &report.source, &label, build_ms, &stats, secs)
 }
 
-fn print_summary(args: &TraceArgs, scene: &str, label: &str, build_ms: f64, s: &BatchStats, secs: f64) -> anyhow::Result<()> {
+fn print_summary(
+    args: &TraceArgs,
+    scene: &str,
+    label: &str,
+    build_ms: f64,
+    s: &BatchStats,
+    secs: f64,
+) -> anyhow::Result<()> {
     let rays_per_s = s.rays as f64 / secs.max(1e-9);
     if args.json {
         let out = json!({

@@ -66,7 +66,7 @@ impl Iterator for AmanatidesWoo {
         let a = argmin3(self.t_max.to_array());
         let t = self.t_max[a];
         let out = CellStep { cell: self.cell.as_uvec3(), t_exit: t.min(self.t1) };
-        if !(t <= self.t1) {
+        if t.is_nan() || t > self.t1 {
             // The segment ends inside this cell.
             self.done = true;
         } else {

@@ -40,7 +40,7 @@ impl ClearyWyvill {
         let c = ray.start_cell(res);
         let seg = ray.t1 - ray.t0;
         let scale = SCALE as f32 / seg;
-        let single = !(seg > 0.0) || !scale.is_finite();
+        let single = seg.is_nan() || seg <= 0.0 || !scale.is_finite();
         let mut step = IVec3::ZERO;
         let mut dist = [BEYOND; 3];
         let mut delta = [BEYOND; 3];

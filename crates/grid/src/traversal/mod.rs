@@ -42,7 +42,8 @@ pub enum Traversal {
 impl Traversal {
     /// The exact traversals (every crossed cell is visited).
     pub const EXACT: [Traversal; 3] = [Traversal::AmanatidesWoo, Traversal::ClearyWyvill, Traversal::Liu];
-    pub const ALL: [Traversal; 4] = [Traversal::AmanatidesWoo, Traversal::ClearyWyvill, Traversal::Liu, Traversal::Bresenham];
+    pub const ALL: [Traversal; 4] =
+        [Traversal::AmanatidesWoo, Traversal::ClearyWyvill, Traversal::Liu, Traversal::Bresenham];
 
     pub fn short_name(self) -> &'static str {
         match self {

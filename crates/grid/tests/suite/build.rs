@@ -15,7 +15,9 @@ fn tris_of(kind: SceneKind, size: u32) -> Vec<[Vec3; 3]> {
 fn layout_is_consistent_and_sorted() {
     let tris = tris_of(SceneKind::Particles, 3000);
     for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
-        let (g, _, _) = build_flat(&tris, Resolution::Cubic(17), &CostModel::default(), BuildOptions { insert, parallel: true }).unwrap();
+        let (g, _, _) =
+            build_flat(&tris, Resolution::Cubic(17), &CostModel::default(), BuildOptions { insert, parallel: true })
+                .unwrap();
         assert_eq!(g.cell_start.len() as u64, g.geom.cell_count() + 1);
         assert_eq!(*g.cell_start.last().unwrap() as usize, g.refs.len());
         assert!(g.cell_start.windows(2).all(|w| w[0] <= w[1]));
@@ -36,7 +38,8 @@ fn layout_is_consistent_and_sorted() {
 fn exact_insertion_is_a_subset_of_bbox_insertion_and_covers_the_triangle() {
     let tris = tris_of(SceneKind::Slivers, 2000);
     let opts = |insert| BuildOptions { insert, parallel: false };
-    let (bb, _, _) = build_flat(&tris, Resolution::Cubic(24), &CostModel::default(), opts(InsertMode::BoundingBox)).unwrap();
+    let (bb, _, _) =
+        build_flat(&tris, Resolution::Cubic(24), &CostModel::default(), opts(InsertMode::BoundingBox)).unwrap();
     let (ex, _, _) = build_flat(&tris, Resolution::Cubic(24), &CostModel::default(), opts(InsertMode::Exact)).unwrap();
     assert!(ex.refs.len() < bb.refs.len() / 2, "slivers: exact {} vs bbox {}", ex.refs.len(), bb.refs.len());
     for c in 0..ex.geom.cell_count() as usize {
@@ -70,8 +73,10 @@ fn parallel_build_is_bit_identical_to_serial() {
         let tris = tris_of(kind, if kind == SceneKind::Mountain { 6 } else { 20_000 });
         for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
             let geom = GridGeometry::new(&triangle_bounds(&tris), [37, 23, 41]);
-            let a = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: false }, &mut PhaseTimes::default()).unwrap();
-            let b = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: true }, &mut PhaseTimes::default()).unwrap();
+            let a = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: false }, &mut PhaseTimes::default())
+                .unwrap();
+            let b = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: true }, &mut PhaseTimes::default())
+                .unwrap();
             assert!(a == b, "{kind:?} {insert:?}");
         }
     }
@@ -105,8 +110,17 @@ fn resolution_policies_follow_their_formulas() {
     assert!(near(cells(Resolution::Point), 2.0 * n * 5.0)); // eq. (1): 2N·Tinter/Tstep
     let line = (n * 5.0).powf(1.5).min(m.cell_cap(tris.len()) as f64);
     assert!(near(cells(Resolution::Line), line)); // eq. (2), capped by memory
-    assert_eq!(resolution::choose(&tris, &b, Resolution::Explicit([3, 4, 5]), &m, InsertMode::BoundingBox, false).resolution, [3, 4, 5]);
-    assert_eq!(resolution::choose(&tris, &b, Resolution::Cubic(40), &m, InsertMode::BoundingBox, false).resolution.iter().max(), Some(&40));
+    assert_eq!(
+        resolution::choose(&tris, &b, Resolution::Explicit([3, 4, 5]), &m, InsertMode::BoundingBox, false).resolution,
+        [3, 4, 5]
+    );
+    assert_eq!(
+        resolution::choose(&tris, &b, Resolution::Cubic(40), &m, InsertMode::BoundingBox, false)
+            .resolution
+            .iter()
+            .max(),
+        Some(&40)
+    );
     for s in ["auto", "point", "line", "density=3.5", "m=64", "10,20,30"] {
         assert!(s.parse::<Resolution>().is_ok(), "{s}");
     }
@@ -128,7 +142,13 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         assert_eq!(best.resolution, choice.resolution);
         // N_m from counting equals the reference count of the built grid, for some samples.
         for s in choice.curve.iter().step_by(4) {
-            let grid = FlatGrid::build(&tris, GridGeometry::new(&b, s.resolution), BuildOptions { insert, parallel: true }, &mut PhaseTimes::default()).unwrap();
+            let grid = FlatGrid::build(
+                &tris,
+                GridGeometry::new(&b, s.resolution),
+                BuildOptions { insert, parallel: true },
+                &mut PhaseTimes::default(),
+            )
+            .unwrap();
             assert_eq!(grid.refs.len() as u64, s.n_m);
             assert!((s.cost - model.cost(s.cells, s.n_m)).abs() < 1e-9);
         }
@@ -137,8 +157,22 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
     }
     // Different constants move the optimum: expensive steps give coarser grids.
-    let cheap = resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step: 0.02, ..model }, InsertMode::BoundingBox, true);
-    let dear = resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step: 1.0, ..model }, InsertMode::BoundingBox, true);
+    let cheap = resolution::choose(
+        &tris,
+        &b,
+        Resolution::Auto,
+        &CostModel { t_step: 0.02, ..model },
+        InsertMode::BoundingBox,
+        true,
+    );
+    let dear = resolution::choose(
+        &tris,
+        &b,
+        Resolution::Auto,
+        &CostModel { t_step: 1.0, ..model },
+        InsertMode::BoundingBox,
+        true,
+    );
     let m = |c: &gridrt_grid::ResolutionChoice| c.resolution.iter().map(|&x| x as f64).product::<f64>();
     assert!(m(&cheap) > m(&dear), "{:?} vs {:?}", cheap.resolution, dear.resolution);
 }

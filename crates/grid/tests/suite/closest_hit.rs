@@ -23,7 +23,8 @@ fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: bool) {
     for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
         let mut grids: Vec<(bool, FlatGrid)> = Vec::new();
         for parallel in [false, true] {
-            let (grid, choice, _) = build_flat(tris, Resolution::Auto, &CostModel::default(), BuildOptions { insert, parallel }).unwrap();
+            let (grid, choice, _) =
+                build_flat(tris, Resolution::Auto, &CostModel::default(), BuildOptions { insert, parallel }).unwrap();
             println!("  {insert:?} parallel={parallel}: resolution {:?}, refs {}", choice.resolution, grid.refs.len());
             grids.push((parallel, grid));
         }
@@ -36,7 +37,12 @@ fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: bool) {
                 for mailbox in [false, true] {
                     let opts = TraceOptions { traversal, mailbox };
                     let (hits, stats) = trace_batch(rays, true, |r| trace_flat(grid, tris, r, opts));
-                    assert_same_hits(&format!("{name} {insert:?} parallel={parallel} {traversal} mailbox={mailbox}"), rays, &expected, &hits);
+                    assert_same_hits(
+                        &format!("{name} {insert:?} parallel={parallel} {traversal} mailbox={mailbox}"),
+                        rays,
+                        &expected,
+                        &hits,
+                    );
                     println!(
                         "    {traversal:>4} mailbox={mailbox:<5}: {:.2} cells/ray, {:.2} tests/ray",
                         stats.mean_cells(),
@@ -87,13 +93,19 @@ fn rays_from_inside_closed_meshes_never_escape() {
         }
         for res in [Resolution::Auto, Resolution::Cubic(3), Resolution::Cubic(200)] {
             for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
-                let (grid, _, _) = build_flat(&tris, res, &CostModel::default(), BuildOptions { insert, parallel: true }).unwrap();
+                let (grid, _, _) =
+                    build_flat(&tris, res, &CostModel::default(), BuildOptions { insert, parallel: true }).unwrap();
                 for traversal in Traversal::EXACT {
                     for mailbox in [false, true] {
                         let opts = TraceOptions { traversal, mailbox };
                         let (hits, stats) = trace_batch(&rays, true, |r| trace_flat(&grid, &tris, r, opts));
                         let escaped = hits.iter().filter(|h| !h.is_hit()).count();
-                        assert_eq!(escaped, 0, "{name} {res:?} {insert:?} {traversal} mailbox={mailbox}: {escaped} of {} rays escaped", rays.len());
+                        assert_eq!(
+                            escaped,
+                            0,
+                            "{name} {res:?} {insert:?} {traversal} mailbox={mailbox}: {escaped} of {} rays escaped",
+                            rays.len()
+                        );
                         assert_eq!(stats.hits as usize, rays.len());
                     }
                 }

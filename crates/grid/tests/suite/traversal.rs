@@ -60,16 +60,26 @@ fn check_walk(kind: Traversal, r: &GridRay, res: UVec3, label: &str) -> (usize, 
     if !kind.is_exact() {
         return (must.len(), missed);
     }
-    assert!(missed == 0, "{label}: {kind} missed {missed} of {} crossed cells; ray {r:?}; visited {cells:?}; must {must:?}", must.len());
+    assert!(
+        missed == 0,
+        "{label}: {kind} missed {missed} of {} crossed cells; ray {r:?}; visited {cells:?}; must {must:?}",
+        must.len()
+    );
     let mut prev_enter = f64::NEG_INFINITY;
     for (i, s) in steps.iter().enumerate() {
         let lo = s.cell.as_dvec3();
         let Some((t_in, t_out)) = slab(r, lo - DVec3::splat(TOL), lo + DVec3::splat(1.0 + TOL)) else {
-            panic!("{label}: {kind} visited cell {:?} the segment does not touch; ray {r:?}; visited {cells:?}", s.cell);
+            panic!(
+                "{label}: {kind} visited cell {:?} the segment does not touch; ray {r:?}; visited {cells:?}",
+                s.cell
+            );
         };
         // Increasing t: each cell is entered no earlier than the previous one (tolerance in t).
         let tol_t = TOL / r.d.as_dvec3().abs().max_element();
-        assert!(t_in + 2.0 * tol_t >= prev_enter, "{label}: {kind} out of order at step {i}; ray {r:?}; visited {cells:?}");
+        assert!(
+            t_in + 2.0 * tol_t >= prev_enter,
+            "{label}: {kind} out of order at step {i}; ray {r:?}; visited {cells:?}"
+        );
         prev_enter = t_in;
         assert!(
             (s.t_exit as f64) <= t_out + 4.0 * tol_t + 1e-6 * t_out.abs(),
@@ -78,7 +88,13 @@ fn check_walk(kind: Traversal, r: &GridRay, res: UVec3, label: &str) -> (usize, 
         );
         if i > 0 {
             let d = s.cell.as_ivec3() - cells[i - 1].as_ivec3();
-            assert_eq!(d.abs().element_sum(), 1, "{label}: {kind} jumped from {:?} to {:?}; ray {r:?}", cells[i - 1], s.cell);
+            assert_eq!(
+                d.abs().element_sum(),
+                1,
+                "{label}: {kind} jumped from {:?} to {:?}; ray {r:?}",
+                cells[i - 1],
+                s.cell
+            );
         }
         assert!(!cells[..i].contains(&s.cell), "{label}: {kind} visited {:?} twice; ray {r:?}", s.cell);
     }
@@ -89,7 +105,11 @@ fn check_walk(kind: Traversal, r: &GridRay, res: UVec3, label: &str) -> (usize, 
 /// outside, missing, unnormalised, clipped.
 fn adversarial_rays(geom: &GridGeometry, rng: &mut Rng, count: usize) -> Vec<Ray> {
     let lattice = |rng: &mut Rng| {
-        let i = UVec3::new(rng.below(geom.res.x as u64 + 1) as u32, rng.below(geom.res.y as u64 + 1) as u32, rng.below(geom.res.z as u64 + 1) as u32);
+        let i = UVec3::new(
+            rng.below(geom.res.x as u64 + 1) as u32,
+            rng.below(geom.res.y as u64 + 1) as u32,
+            rng.below(geom.res.z as u64 + 1) as u32,
+        );
         geom.min + i.as_vec3() * geom.cell
     };
     let ext = geom.max - geom.min;

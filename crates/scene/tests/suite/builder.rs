@@ -29,7 +29,7 @@ impl Doc {
 
     /// Appends raw bytes as a buffer view; returns its index.
     pub fn view(&mut self, bytes: &[u8]) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let off = self.bin.len();
@@ -84,7 +84,7 @@ impl Doc {
     }
 
     fn finish_buffers(&mut self, uri: Option<String>) {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut b = json!({"byteLength": self.bin.len()});
@@ -97,7 +97,7 @@ impl Doc {
     pub fn glb(mut self) -> Vec<u8> {
         self.finish_buffers(None);
         let mut j = serde_json::to_vec(&self.json).unwrap();
-        while j.len() % 4 != 0 {
+        while !j.len().is_multiple_of(4) {
             j.push(b' ');
         }
         gridrt_scene::glb_write::assemble_glb(&j, Some(&self.bin))

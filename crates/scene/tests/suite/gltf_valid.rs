@@ -83,7 +83,7 @@ fn embedded_external_and_glb_buffers_load_the_same() {
         let p = d.positions(&[tri(Vec3::ZERO), tri(Vec3::ONE)].concat());
         let i = d.indices_u16(&[0, 1, 2, 3, 4, 5]);
         let m = d.mesh(p, Some(i), 4);
-        let n = d.node(json!({"mesh": m, "rotation": [0.0, 0.7071068, 0.0, 0.7071068]}));
+        let n = d.node(json!({"mesh": m, "rotation": [0.0, std::f32::consts::FRAC_1_SQRT_2, 0.0, std::f32::consts::FRAC_1_SQRT_2]}));
         d.root(n);
         d
     };
@@ -106,7 +106,8 @@ fn sparse_positions_and_default_scene_selection() {
     // Sparse: replace vertex 2 by (0, 5, 0).
     let idx = d.view(&2u16.to_le_bytes());
     let vals = d.view(&[0f32, 5.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<_>>());
-    d.json["accessors"][0]["sparse"] = json!({"count": 1, "indices": {"bufferView": idx, "componentType": 5123}, "values": {"bufferView": vals}});
+    d.json["accessors"][0]["sparse"] =
+        json!({"count": 1, "indices": {"bufferView": idx, "componentType": 5123}, "values": {"bufferView": vals}});
     // Scene 1 is the default: it holds a second instance, translated.
     d.json["nodes"].as_array_mut().unwrap().push(json!({"mesh": 0, "translation": [0.0, 0.0, 7.0]}));
     d.json["scenes"].as_array_mut().unwrap().push(json!({"nodes": [1]}));

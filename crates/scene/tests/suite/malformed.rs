@@ -54,7 +54,9 @@ fn malformed_corpus_gives_specific_errors() {
     let mut w = valid.clone();
     w[16..20].copy_from_slice(b"BIN\0");
     case("first chunk not JSON", w, &|e| matches!(e, SceneError::InvalidGlb { .. }));
-    case("invalid JSON syntax", br#"{"asset": {"version": "2.0"}, "meshes": [ "#.to_vec(), &|e| matches!(e, SceneError::InvalidJson { .. }));
+    case("invalid JSON syntax", br#"{"asset": {"version": "2.0"}, "meshes": [ "#.to_vec(), &|e| {
+        matches!(e, SceneError::InvalidJson { .. })
+    });
     case(
         "dangling accessor reference",
         with_json(Doc::single_triangle(), |j| j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(42)),
@@ -92,7 +94,9 @@ fn malformed_corpus_gives_specific_errors() {
         let m = d.mesh(p, Some(i), 4);
         let n = d.node(json!({"mesh": m}));
         d.root(n);
-        case("index out of range", d.glb(), &|e| matches!(e, SceneError::IndexOutOfRange { index: 7, vertex_count: 3, index_position: 2, .. }));
+        case("index out of range", d.glb(), &|e| {
+            matches!(e, SceneError::IndexOutOfRange { index: 7, vertex_count: 3, index_position: 2, .. })
+        });
     }
     case(
         "non-float positions",
@@ -102,11 +106,9 @@ fn malformed_corpus_gives_specific_errors() {
         }),
         &|e| matches!(e, SceneError::NonFloatPositions { accessor: 0, .. }),
     );
-    case(
-        "VEC2 positions",
-        with_json(Doc::single_triangle(), |j| j["accessors"][0]["type"] = json!("VEC2")),
-        &|e| matches!(e, SceneError::NonFloatPositions { .. } | SceneError::InvalidJson { .. }),
-    );
+    case("VEC2 positions", with_json(Doc::single_triangle(), |j| j["accessors"][0]["type"] = json!("VEC2")), &|e| {
+        matches!(e, SceneError::NonFloatPositions { .. } | SceneError::InvalidJson { .. })
+    });
     {
         let mut d = Doc::new();
         let p = d.positions(&[[0.0; 3], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]]);
@@ -134,18 +136,19 @@ fn malformed_corpus_gives_specific_errors() {
             j["nodes"][0]["scale"] = json!([3e38, 3e38, 3e38]);
             j["nodes"][0]["translation"] = json!([-3e38, 3e38, 3e38]);
         }),
-        &|e| matches!(e, SceneError::NonFiniteVertex { node: Some(0), .. } | SceneError::CoordinateOutOfRange { node: 0, .. }),
+        &|e| {
+            matches!(
+                e,
+                SceneError::NonFiniteVertex { node: Some(0), .. } | SceneError::CoordinateOutOfRange { node: 0, .. }
+            )
+        },
     );
     case(
         "only points, no triangles",
         with_json(Doc::single_triangle(), |j| j["meshes"][0]["primitives"][0]["mode"] = json!(0)),
         &|e| matches!(e, SceneError::NoTriangles { detail, .. } if detail.contains("Points")),
     );
-    case(
-        "no meshes at all",
-        with_json(Doc::new(), |_| {}),
-        &|e| matches!(e, SceneError::NoTriangles { .. }),
-    );
+    case("no meshes at all", with_json(Doc::new(), |_| {}), &|e| matches!(e, SceneError::NoTriangles { .. }));
     case(
         "node cycle",
         with_json(Doc::single_triangle(), |j| {
@@ -169,7 +172,7 @@ fn malformed_corpus_gives_specific_errors() {
         let g = {
             d.json["buffers"] = json!([{"byteLength": 10_000}]);
             let mut j = serde_json::to_vec(&d.json).unwrap();
-            while j.len() % 4 != 0 {
+            while !j.len().is_multiple_of(4) {
                 j.push(b' ');
             }
             gridrt_scene::glb_write::assemble_glb(&j, Some(&d.bin))
