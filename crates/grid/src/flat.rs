@@ -9,17 +9,17 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
-use crate::geometry::GridGeometry;
-use crate::insert::{InsertMode, for_each_cell, prepare};
+use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
+use crate::insert::{InsertMode, bucket, for_each_cell, prepare};
 
 /// Largest number of references a grid may hold (u32 offsets; keeps memory bounded).
 pub const MAX_REFS: u64 = 1 << 31;
 
 /// How a grid is built.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct BuildOptions {
     pub insert: InsertMode,
     /// Use all threads (rayon); the result is identical to the serial build.
@@ -113,7 +113,7 @@ impl FlatGrid {
 }
 
 /// Exclusive prefix sum of per-cell counts into `cell_start` (M + 1 entries).
-fn prefix_sum(counts: impl Iterator<Item = u32>, cells: usize) -> Result<Vec<u32>, BuildError> {
+pub(crate) fn prefix_sum(counts: impl Iterator<Item = u32>, cells: usize) -> Result<Vec<u32>, BuildError> {
     let mut start = Vec::with_capacity(cells + 1);
     let mut acc = 0u64;
     for c in counts {
@@ -133,26 +133,7 @@ fn build_serial(
     mode: InsertMode,
     times: &mut PhaseTimes,
 ) -> Result<FlatGrid, BuildError> {
-    let cells = geom.cell_count() as usize;
-    let mut counts = vec![0u32; cells];
-    times.record("count", || {
-        for tri in tris {
-            for_each_cell(&geom, &prepare(&geom, tri), mode, |c| counts[c] += 1);
-        }
-    });
-    let cell_start = times.record("scan", || prefix_sum(counts.iter().copied(), cells))?;
-    let refs = times.record("scatter", || {
-        let mut cursor = counts;
-        cursor.copy_from_slice(&cell_start[..cells]);
-        let mut refs = vec![0u32; cell_start[cells] as usize];
-        for (i, tri) in tris.iter().enumerate() {
-            for_each_cell(&geom, &prepare(&geom, tri), mode, |c| {
-                refs[cursor[c] as usize] = i as u32;
-                cursor[c] += 1;
-            });
-        }
-        refs
-    });
+    let (cell_start, refs) = bucket(tris, None, &geom, mode, INSERT_MARGIN_CELLS, Some(times))?;
     Ok(FlatGrid { geom, cell_start, refs })
 }
 
@@ -174,7 +155,7 @@ mod parallel {
         let counts: Vec<AtomicU32> = times.record("count", || {
             let counts: Vec<AtomicU32> = (0..cells).into_par_iter().map(|_| AtomicU32::new(0)).collect();
             tris.par_iter().for_each(|tri| {
-                for_each_cell(&geom, &prepare(&geom, tri), mode, |c| {
+                for_each_cell(&geom, &prepare(&geom, tri, INSERT_MARGIN_CELLS), mode, |c| {
                     counts[c].fetch_add(1, Relaxed);
                 });
             });
@@ -185,7 +166,7 @@ mod parallel {
             counts.par_iter().zip(&cell_start[..cells]).for_each(|(c, s)| c.store(*s, Relaxed));
             let refs: Vec<AtomicU32> = (0..cell_start[cells]).into_par_iter().map(|_| AtomicU32::new(0)).collect();
             tris.par_iter().enumerate().for_each(|(i, tri)| {
-                for_each_cell(&geom, &prepare(&geom, tri), mode, |c| {
+                for_each_cell(&geom, &prepare(&geom, tri, INSERT_MARGIN_CELLS), mode, |c| {
                     let slot = counts[c].fetch_add(1, Relaxed);
                     refs[slot as usize].store(i as u32, Relaxed);
                 });

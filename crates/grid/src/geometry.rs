@@ -79,41 +79,7 @@ impl GridGeometry {
     /// The ray in grid space clipped to the grid box and to `[tmin, tmax]`, or `None` when the
     /// segment misses the grid.
     pub fn clip(&self, r: &PreparedRay) -> Option<GridRay> {
-        let o = (r.org - self.min) * self.inv_cell;
-        let mut d = r.dir * self.inv_cell;
-        // A component so small that its reciprocal overflows is treated as exactly parallel,
-        // by the clip and by every walker (they test `d[a] == 0`).
-        for a in 0..3 {
-            if !(1.0 / d[a]).is_finite() {
-                d[a] = 0.0;
-            }
-        }
-        let inv_d = Vec3::ONE / d;
-        let res = self.res.as_vec3();
-        let mut t0 = r.tmin;
-        let mut t1 = r.tmax;
-        for a in 0..3 {
-            if d[a] == 0.0 {
-                if !(o[a] >= 0.0 && o[a] <= res[a]) {
-                    return None;
-                }
-                continue;
-            }
-            let ta = (0.0 - o[a]) * inv_d[a];
-            let tb = (res[a] - o[a]) * inv_d[a];
-            let (lo, hi) = if ta <= tb { (ta, tb) } else { (tb, ta) };
-            // NaN-safe: a NaN bound (infinite inv_d meeting a zero) never narrows the range.
-            if lo > t0 {
-                t0 = lo;
-            }
-            if hi < t1 {
-                t1 = hi;
-            }
-        }
-        if !t0.is_finite() || !t1.is_finite() || t0 > t1 {
-            return None;
-        }
-        Some(GridRay { o, d, inv_d, t0, t1 })
+        GridRay::clipped((r.org - self.min) * self.inv_cell, r.dir * self.inv_cell, self.res, r.tmin, r.tmax)
     }
 }
 
@@ -129,6 +95,63 @@ pub struct GridRay {
 }
 
 impl GridRay {
+    /// The ray `o + t·d` (already in grid space) clipped to the box `[0, res]` and to
+    /// `[tmin, tmax]`; `None` when nothing is left. Shared by every level of every structure,
+    /// so that all of them treat parallel components and empty ranges alike.
+    pub fn clipped(o: Vec3, mut d: Vec3, res: UVec3, tmin: f32, tmax: f32) -> Option<GridRay> {
+        // A component so small that its reciprocal overflows is treated as exactly parallel,
+        // by the clip and by every walker (they test `d[a] == 0`).
+        for a in 0..3 {
+            if !(1.0 / d[a]).is_finite() {
+                d[a] = 0.0;
+            }
+        }
+        let inv_d = Vec3::ONE / d;
+        let res = res.as_vec3();
+        let mut t0 = tmin;
+        let mut t1 = tmax;
+        for a in 0..3 {
+            if d[a] == 0.0 {
+                if !(o[a] >= 0.0 && o[a] <= res[a]) {
+                    return None;
+                }
+                continue;
+            }
+            let ta = (0.0 - o[a]) * inv_d[a];
+            let tb = (res[a] - o[a]) * inv_d[a];
+            let (lo, hi) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+            if lo > t0 {
+                t0 = lo;
+            }
+            if hi < t1 {
+                t1 = hi;
+            }
+        }
+        if !t0.is_finite() || !t1.is_finite() || t0 > t1 {
+            return None;
+        }
+        Some(GridRay { o, d, inv_d, t0, t1 })
+    }
+
+    /// This ray seen from a sub-grid of `sub_res` cells filling cell `c` (a hierarchy's child
+    /// grid), over the parent's `[t0, t1]` for that cell.
+    ///
+    /// Deliberately not clipped to the child's box: the parent walker may place the ray in a
+    /// cell it only grazes (within the insertion margin; Liu's fixed point does this on walls),
+    /// and an exact clip would then drop the cell and the hits inserted there. The child walker
+    /// clamps its cells into the sub-grid instead.
+    #[inline]
+    pub fn child(&self, c: UVec3, sub_res: UVec3, t0: f32, t1: f32) -> GridRay {
+        let s = sub_res.as_vec3();
+        let mut d = self.d * s;
+        for a in 0..3 {
+            if !(1.0 / d[a]).is_finite() {
+                d[a] = 0.0;
+            }
+        }
+        GridRay { o: (self.o - c.as_vec3()) * s, d, inv_d: Vec3::ONE / d, t0, t1 }
+    }
+
     /// The cell containing the segment's start, clamped into the grid.
     #[inline]
     pub fn start_cell(&self, res: UVec3) -> UVec3 {

@@ -9,12 +9,12 @@
 //! reference would then hit them, so skipping them would break bit-exact agreement.
 
 use glam::{DVec3, UVec3, Vec3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
+use crate::geometry::GridGeometry;
 
 /// How triangles are assigned to cells.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum InsertMode {
     /// Every cell overlapped by the triangle's bounding box.
     #[default]
@@ -29,21 +29,24 @@ pub struct GridTriangle {
     pub v: [DVec3; 3],
     pub lo: UVec3,
     pub hi: UVec3,
+    /// Insertion margin in cells (also applied by the exact test).
+    pub margin: f64,
 }
 
-/// The triangle in grid space with its conservative cell range. The range is clamped to the grid (triangles outside the grid box are clamped
+/// The triangle in grid space with its conservative cell range: every cell within `margin`
+/// cells of the triangle (see [`crate::geometry::INSERT_MARGIN_CELLS`]). The range is clamped to the grid (triangles outside the grid box are clamped
 /// too; a grid is always built over bounds that contain all triangles).
 #[inline]
-pub fn prepare(geom: &GridGeometry, tri: &[Vec3; 3]) -> GridTriangle {
+pub fn prepare(geom: &GridGeometry, tri: &[Vec3; 3], margin: f64) -> GridTriangle {
     let min = geom.min.as_dvec3();
     let inv = geom.inv_cell.as_dvec3();
     let v = tri.map(|p| (p.as_dvec3() - min) * inv);
-    let lo = v[0].min(v[1]).min(v[2]) - DVec3::splat(INSERT_MARGIN_CELLS);
-    let hi = v[0].max(v[1]).max(v[2]) + DVec3::splat(INSERT_MARGIN_CELLS);
+    let lo = v[0].min(v[1]).min(v[2]) - DVec3::splat(margin);
+    let hi = v[0].max(v[1]).max(v[2]) + DVec3::splat(margin);
     let max = (geom.res - UVec3::ONE).as_dvec3();
     let lo = lo.floor().clamp(DVec3::ZERO, max).as_uvec3();
     let hi = hi.floor().clamp(DVec3::ZERO, max).as_uvec3();
-    GridTriangle { v, lo, hi }
+    GridTriangle { v, lo, hi, margin }
 }
 
 /// Calls `f(cell_index)` for every cell `tri` is inserted into, in increasing index order
@@ -58,7 +61,7 @@ pub fn for_each_cell(geom: &GridGeometry, g: &GridTriangle, mode: InsertMode, mu
                 let c = UVec3::new(x, y, z);
                 if mode == InsertMode::Exact
                     && !single
-                    && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + INSERT_MARGIN_CELLS)
+                    && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + g.margin)
                 {
                     continue;
                 }
@@ -116,4 +119,50 @@ pub fn tri_box_overlap(tri: &[DVec3; 3], c: DVec3, h: f64) -> bool {
     let d = n.dot(v0);
     let r = h * (n.x.abs() + n.y.abs() + n.z.abs());
     d.abs() <= r
+}
+
+/// Buckets the triangles `ids` (or all of `tris` when `None`) into the cells of `geom`: the
+/// serial count → prefix sum → scatter of survey Algorithm 1. Returns `cell_start` (M + 1
+/// offsets) and the references, increasing within each cell. Used by the flat grid and by
+/// every node of the hierarchical grids.
+pub fn bucket(
+    tris: &[[Vec3; 3]],
+    ids: Option<&[u32]>,
+    geom: &GridGeometry,
+    mode: InsertMode,
+    margin: f64,
+    mut times: Option<&mut crate::flat::PhaseTimes>,
+) -> Result<(Vec<u32>, Vec<u32>), crate::BuildError> {
+    let cells = geom.cell_count() as usize;
+    let n = ids.map_or(tris.len(), |v| v.len());
+    let id = |k: usize| ids.map_or(k as u32, |v| v[k]);
+    let mut record = |name: &str, start: std::time::Instant| {
+        if let Some(t) = times.as_deref_mut() {
+            t.0.push((name.to_string(), start.elapsed().as_secs_f64() * 1e3));
+        }
+    };
+    let start = std::time::Instant::now();
+    let mut counts = vec![0u32; cells];
+    for k in 0..n {
+        let g = prepare(geom, &tris[id(k) as usize], margin);
+        for_each_cell(geom, &g, mode, |c| counts[c] += 1);
+    }
+    record("count", start);
+    let start = std::time::Instant::now();
+    let cell_start = crate::flat::prefix_sum(counts.iter().copied(), cells)?;
+    record("scan", start);
+    let start = std::time::Instant::now();
+    let mut cursor = counts;
+    cursor.copy_from_slice(&cell_start[..cells]);
+    let mut refs = vec![0u32; cell_start[cells] as usize];
+    for k in 0..n {
+        let i = id(k);
+        let g = prepare(geom, &tris[i as usize], margin);
+        for_each_cell(geom, &g, mode, |c| {
+            refs[cursor[c] as usize] = i;
+            cursor[c] += 1;
+        });
+    }
+    record("scatter", start);
+    Ok((cell_start, refs))
 }

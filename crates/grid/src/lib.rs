@@ -1,20 +1,28 @@
 //! CPU grid acceleration structures for gridrt (pure Rust; compiles for wasm32 with the
 //! `parallel` feature off).
 //!
-//! Data flows one way: triangles → [`resolution`] (choose the grid size) → [`flat`] (build,
-//! using [`insert`]) → [`trace`] (closest hit, walking cells with a [`traversal`]) → hits and
-//! [`stats`]. [`brute`] is the reference every structure must reproduce bit for bit.
+//! Data flows one way: triangles → [`resolution`] (choose the grid size) → a structure
+//! ([`flat`], [`macrocell`], [`multires`], [`twolevel`], [`proximity`]; built with [`insert`],
+//! hierarchies laid out by [`hierarchy`]) → closest hit ([`trace`], walking cells with a
+//! [`traversal`]) → hits and [`stats`]. [`structure`] is the one entry point over all kinds;
+//! [`brute`] is the reference every structure must reproduce bit for bit.
 
 pub mod brute;
 pub mod flat;
 pub mod geometry;
+pub mod hierarchy;
 pub mod insert;
+pub mod macrocell;
 pub mod mailbox;
+pub mod multires;
+pub mod proximity;
 pub mod resolution;
 pub mod stats;
+pub mod structure;
 pub mod trace;
 pub mod traversal;
 pub mod triangle;
+pub mod twolevel;
 
 use glam::Vec3;
 use gridrt_scene::Aabb;
@@ -25,6 +33,7 @@ pub use geometry::GridGeometry;
 pub use insert::InsertMode;
 pub use resolution::{CostModel, Resolution, ResolutionChoice};
 pub use stats::{BatchStats, RayStats};
+pub use structure::{AnyGrid, BuildReport, GridConfig, GridKind, StructureStats};
 pub use trace::TraceOptions;
 pub use traversal::Traversal;
 
@@ -36,6 +45,8 @@ pub enum BuildError {
         "the grid would hold {refs} triangle references, more than the limit of {limit}; lower the resolution or use bounding-box-free exact insertion"
     )]
     TooManyReferences { refs: u64, limit: u64 },
+    #[error("{0}")]
+    InvalidParameter(String),
 }
 
 /// Bounds of a triangle soup (all corners).

@@ -24,7 +24,7 @@ use glam::Vec3;
 use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::{GridGeometry, MAX_AXIS_RES, padded_bounds};
+use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES, padded_bounds};
 use crate::insert::{InsertMode, cell_count, prepare};
 
 /// The constants of T = Tsetup + m·Tstep + μ·Tinter, plus the guess-and-check settings.
@@ -169,7 +169,7 @@ pub fn cubic_m(bounds: &Aabb, m: u32) -> [u32; 3] {
 /// iteration).
 pub fn count_refs(tris: &[[Vec3; 3]], bounds: &Aabb, res: [u32; 3], mode: InsertMode, parallel: bool) -> u64 {
     let geom = GridGeometry::new(bounds, res);
-    let one = |t: &[Vec3; 3]| cell_count(&geom, &prepare(&geom, t), mode);
+    let one = |t: &[Vec3; 3]| cell_count(&geom, &prepare(&geom, t, INSERT_MARGIN_CELLS), mode);
     #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;

@@ -8,12 +8,19 @@
 //! which negates the result exactly), so no ray slips between two triangles.
 //!
 //! Differences from the paper, on purpose:
-//! - no double-precision re-evaluation when an edge function is exactly zero: WGSL has no
-//!   f64, and the GPU port must do the same arithmetic. A zero edge function counts as
-//!   inside, so a ray through an edge or vertex hits every triangle around it (the
-//!   deterministic tie-break then picks the smallest triangle index): still watertight.
-//! - no back-face culling; `t` is computed by one division and must be finite and inside
-//!   `[tmin, tmax]` (closed interval).
+//! - the edge functions U, V, W are always evaluated with an exact sign: the sheared f32
+//!   coordinates are multiplied in f64 (exact: 24 + 24 mantissa bits fit in 53) and the
+//!   difference rounded once. The paper does this only when a float result is exactly zero;
+//!   that is not enough: for a triangle seen nearly edge-on from far away, both products of an
+//!   edge function round to the same float, U = V = 0 and the "hit" lands hundreds of units
+//!   from the triangle (found on Crytek Sponza). With exact signs, "inside" is decided exactly
+//!   for the rounded 2-D points, so a hit is always within rounding distance of the triangle,
+//!   and a shared edge still gets exactly opposite signs in its two triangles (watertight).
+//!   `det`, `t`, `u`, `v` follow in f64 and are rounded to f32 once. (WGSL has no f64; the GPU
+//!   port gets the same signs from Kahan's FMA difference of products.)
+//! - an edge function of exactly zero counts as inside, so a ray through an edge or vertex hits
+//!   every triangle around it (the deterministic tie-break then picks the smallest index).
+//! - no back-face culling; `t` must be finite and inside `[tmin, tmax]` (closed interval).
 
 use glam::Vec3;
 use gridrt_scene::Ray;
@@ -93,12 +100,13 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     let a = tri[0] - r.org;
     let b = tri[1] - r.org;
     let c = tri[2] - r.org;
-    let ax = a[r.kx] - r.sx * a[r.kz];
-    let ay = a[r.ky] - r.sy * a[r.kz];
-    let bx = b[r.kx] - r.sx * b[r.kz];
-    let by = b[r.ky] - r.sy * b[r.kz];
-    let cx = c[r.kx] - r.sx * c[r.kz];
-    let cy = c[r.ky] - r.sy * c[r.kz];
+    let ax = (a[r.kx] - r.sx * a[r.kz]) as f64;
+    let ay = (a[r.ky] - r.sy * a[r.kz]) as f64;
+    let bx = (b[r.kx] - r.sx * b[r.kz]) as f64;
+    let by = (b[r.ky] - r.sy * b[r.kz]) as f64;
+    let cx = (c[r.kx] - r.sx * c[r.kz]) as f64;
+    let cy = (c[r.ky] - r.sy * c[r.kz]) as f64;
+    // Exact products, one rounding: the sign of each edge function is exact.
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
@@ -109,14 +117,14 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     if det == 0.0 {
         return None;
     }
-    let az = r.sz * a[r.kz];
-    let bz = r.sz * b[r.kz];
-    let cz = r.sz * c[r.kz];
-    let t = (u * az + v * bz + w * cz) / det;
+    let az = (r.sz * a[r.kz]) as f64;
+    let bz = (r.sz * b[r.kz]) as f64;
+    let cz = (r.sz * c[r.kz]) as f64;
+    let t = ((u * az + v * bz + w * cz) / det) as f32;
     if !(t >= r.tmin && t <= r.tmax && t < f32::INFINITY) {
         return None;
     }
-    Some(TriHit { t, u: v / det, v: w / det })
+    Some(TriHit { t, u: (v / det) as f32, v: (w / det) as f32 })
 }
 
 /// Deterministic order of candidate hits: smaller `t`, then smaller triangle index.

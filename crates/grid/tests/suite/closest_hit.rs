@@ -1,10 +1,11 @@
-//! Closest hits through the flat grid equal brute force exactly (same triangle, same t bits)
-//! for every traversal × insertion × mailbox × serial/parallel build, on procedural scenes and
-//! on ../shared/scenes when present; rays from inside closed meshes never escape.
+//! Closest hits through every grid kind equal brute force exactly (same triangle, same t bits)
+//! for every kind × traversal × insertion × mailbox, with serial and parallel builds
+//! bit-identical, on procedural scenes and on ../shared/scenes when present; rays from inside
+//! closed meshes never escape.
 
 use glam::Vec3;
-use gridrt_grid::trace::{TraceOptions, trace_batch, trace_flat};
-use gridrt_grid::{BuildOptions, CostModel, FlatGrid, InsertMode, Resolution, Traversal, build_flat};
+use gridrt_grid::trace::TraceOptions;
+use gridrt_grid::{BuildOptions, GridConfig, GridKind, InsertMode, Resolution, Traversal, structure};
 use gridrt_scene::Ray;
 use gridrt_scene::gltf_load::load_path;
 use gridrt_scene::rays::inside_rays;
@@ -13,41 +14,51 @@ use super::common::*;
 
 const RAYS: usize = 100_000;
 
-/// Builds every (insertion, serial/parallel) grid, checks serial == parallel bit for bit, and
-/// compares every traversal × mailbox against the reference. `all_builds`: also trace through
-/// the parallel grids (identical by the check above, so optional for big scenes).
-fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: bool) {
+/// Builds every kind × insertion serially and in parallel (must be identical), then compares
+/// every traversal × mailbox against the reference. `all_builds`: also trace through the
+/// parallel builds (identical by the check, so optional for big scenes).
+pub fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: bool) {
     let (expected, ref_stats) = reference(tris, rays);
     println!("{name}: {} triangles, {} rays, {} hits", tris.len(), rays.len(), ref_stats.hits);
     assert!(ref_stats.hits as usize > rays.len() / 20, "{name}: suspiciously few hits ({})", ref_stats.hits);
-    for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
-        let mut grids: Vec<(bool, FlatGrid)> = Vec::new();
-        for parallel in [false, true] {
-            let (grid, choice, _) =
-                build_flat(tris, Resolution::Auto, &CostModel::default(), BuildOptions { insert, parallel }).unwrap();
-            println!("  {insert:?} parallel={parallel}: resolution {:?}, refs {}", choice.resolution, grid.refs.len());
-            grids.push((parallel, grid));
-        }
-        assert!(grids[0].1 == grids[1].1, "{name} {insert:?}: parallel build differs from serial");
-        for (parallel, grid) in &grids {
-            if *parallel && !all_builds {
-                continue;
-            }
-            for traversal in Traversal::EXACT {
-                for mailbox in [false, true] {
-                    let opts = TraceOptions { traversal, mailbox };
-                    let (hits, stats) = trace_batch(rays, true, |r| trace_flat(grid, tris, r, opts));
-                    assert_same_hits(
-                        &format!("{name} {insert:?} parallel={parallel} {traversal} mailbox={mailbox}"),
-                        rays,
-                        &expected,
-                        &hits,
-                    );
+    for kind in GridKind::ALL {
+        for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+            let mut grids = Vec::new();
+            for parallel in [false, true] {
+                let cfg = GridConfig { kind, build: BuildOptions { insert, parallel }, ..GridConfig::default() };
+                let (grid, report) = structure::build(tris, &cfg).unwrap();
+                if !parallel {
+                    let s = &report.stats;
                     println!(
-                        "    {traversal:>4} mailbox={mailbox:<5}: {:.2} cells/ray, {:.2} tests/ray",
-                        stats.mean_cells(),
-                        stats.mean_tests()
+                        "  {kind} {insert:?}: top {:?}, {} nodes, {} refs, {} bytes",
+                        s.resolution, s.nodes, s.refs, s.memory_bytes
                     );
+                }
+                grids.push((parallel, grid));
+            }
+            assert!(grids[0].1 == grids[1].1, "{name} {kind} {insert:?}: parallel build differs from serial");
+            for (parallel, grid) in &grids {
+                if *parallel && !all_builds {
+                    continue;
+                }
+                for traversal in Traversal::EXACT {
+                    for mailbox in [false, true] {
+                        let opts = TraceOptions { traversal, mailbox };
+                        let (hits, stats) = grid.trace_batch(tris, rays, opts, true);
+                        assert_same_hits(
+                            &format!("{name} {kind} {insert:?} parallel={parallel} {traversal} mailbox={mailbox}"),
+                            rays,
+                            &expected,
+                            &hits,
+                        );
+                        if !parallel && mailbox {
+                            println!(
+                                "    {traversal:>4} + mailbox: {:.2} cells/ray, {:.2} tests/ray",
+                                stats.mean_cells(),
+                                stats.mean_tests()
+                            );
+                        }
+                    }
                 }
             }
         }
@@ -55,7 +66,7 @@ fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: bool) {
 }
 
 #[test]
-fn flat_grid_equals_brute_force_on_procedural_scenes() {
+fn every_grid_equals_brute_force_on_procedural_scenes() {
     for (name, g) in procedural_scenes() {
         let tris = g.mesh.triangles();
         let rays = mixed_rays(&g.mesh, &g.inside_points, RAYS, 11);
@@ -64,7 +75,7 @@ fn flat_grid_equals_brute_force_on_procedural_scenes() {
 }
 
 #[test]
-fn flat_grid_equals_brute_force_on_shared_scenes() {
+fn every_grid_equals_brute_force_on_shared_scenes() {
     let scenes = shared_scenes();
     if scenes.is_empty() {
         println!("../shared/scenes not present: nothing to do (procedural scenes are tested separately)");
@@ -91,22 +102,29 @@ fn rays_from_inside_closed_meshes_never_escape() {
         for (i, p) in g.inside_points.iter().enumerate() {
             rays.extend(inside_rays(&g.mesh, *p, 20_000 / g.inside_points.len() + 40, i as u64));
         }
-        for res in [Resolution::Auto, Resolution::Cubic(3), Resolution::Cubic(200)] {
-            for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
-                let (grid, _, _) =
-                    build_flat(&tris, res, &CostModel::default(), BuildOptions { insert, parallel: true }).unwrap();
-                for traversal in Traversal::EXACT {
-                    for mailbox in [false, true] {
-                        let opts = TraceOptions { traversal, mailbox };
-                        let (hits, stats) = trace_batch(&rays, true, |r| trace_flat(&grid, &tris, r, opts));
-                        let escaped = hits.iter().filter(|h| !h.is_hit()).count();
-                        assert_eq!(
-                            escaped,
-                            0,
-                            "{name} {res:?} {insert:?} {traversal} mailbox={mailbox}: {escaped} of {} rays escaped",
-                            rays.len()
-                        );
-                        assert_eq!(stats.hits as usize, rays.len());
+        for kind in GridKind::ALL {
+            for res in [None, Some(Resolution::Cubic(3)), Some(Resolution::Cubic(200))] {
+                for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+                    let cfg = GridConfig {
+                        kind,
+                        resolution: res,
+                        build: BuildOptions { insert, parallel: true },
+                        ..GridConfig::default()
+                    };
+                    let (grid, _) = structure::build(&tris, &cfg).unwrap();
+                    for traversal in Traversal::EXACT {
+                        for mailbox in [false, true] {
+                            let opts = TraceOptions { traversal, mailbox };
+                            let (hits, stats) = grid.trace_batch(&tris, &rays, opts, true);
+                            let escaped = hits.iter().filter(|h| !h.is_hit()).count();
+                            assert_eq!(
+                                escaped,
+                                0,
+                                "{name} {kind} {res:?} {insert:?} {traversal} mailbox={mailbox}: {escaped} of {} rays escaped",
+                                rays.len()
+                            );
+                            assert_eq!(stats.hits as usize, rays.len());
+                        }
                     }
                 }
             }

@@ -2,4 +2,6 @@
 pub mod build;
 pub mod closest_hit;
 pub mod common;
+pub mod degenerate;
 pub mod traversal;
+pub mod triangle;

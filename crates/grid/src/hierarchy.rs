@@ -1,0 +1,193 @@
+//! The layout and traversal shared by the hierarchical grids ([`crate::multires`],
+//! [`crate::twolevel`]): a tree of uniform grids in flat arrays.
+//!
+//! # Layout (GPU-ready: flat arrays, indices only)
+//! - `nodes`: one [`Node`] per grid: its resolution, the index of its first cell in `cells`,
+//!   its depth. Node 0 is the top grid; its box is the structure's box. A child node fills
+//!   exactly one cell of its parent, so its box is implied by the path and never stored.
+//! - `cells`: two u32 per cell, `[a, b]`: a leaf holds `refs[a .. a + b]`; an internal cell
+//!   has `b == CHILD` and `a` = the child node's index.
+//! - `refs`: triangle indices, increasing within each leaf.
+//!
+//! Why a flat node array and not the survey's hash table of internal voxels: every cell needs
+//! its (start, count) slot anyway when it is a leaf, so storing the child index in that same
+//! slot costs no memory at all, and it is found in O(1) without probing. A hash table keyed by
+//! (node, cell) would add ≥ 8 bytes per internal voxel (key + value, more with a load factor
+//! below 1) on top of the cell array, and probe sequences on the GPU. Measured memory per
+//! structure is printed by `gridrt build --json`.
+//!
+//! # Traversal
+//! A stack of walkers, one per level: each cell of the current grid is either a leaf (test its
+//! triangles) or a child grid, walked over that cell's `[t_enter, t_exit]` ([`GridRay::child`],
+//! which clamps rather than clips, so a cell the parent grazes within the margin is still
+//! searched). The closest-hit rule is the flat grid's, applied at every level: stop at
+//! the first visited leaf whose exit `t` lies beyond the best hit.
+//!
+//! # Robustness
+//! A child grid's ray is derived from its parent's, so rounding errors grow with the product of
+//! the resolutions along the path. Each node therefore inserts with its own margin
+//! ([`Node::margin`]), at least [`INSERT_MARGIN_CELLS`] and never smaller than a bound on that
+//! error; the builders refuse to subdivide where the margin would exceed
+//! [`MAX_CHILD_MARGIN`] of a cell (f32 has run out of precision there).
+
+use glam::{UVec3, Vec3};
+use gridrt_scene::{Hit, Ray};
+use serde::Serialize;
+
+use crate::geometry::{GridGeometry, GridRay, INSERT_MARGIN_CELLS};
+use crate::mailbox::Mailbox;
+use crate::stats::RayStats;
+use crate::traversal::{Traversal, Walker};
+use crate::triangle::{PreparedRay, closer, intersect};
+
+/// `cells[i][1] == CHILD` marks an internal cell.
+pub const CHILD: u32 = u32::MAX;
+/// Deepest level any hierarchy may have (the traversal stack is this deep).
+pub const MAX_DEPTH: usize = 8;
+/// Largest insertion margin, in cells, a child grid may need before subdividing is refused.
+pub const MAX_CHILD_MARGIN: f64 = 0.125;
+
+/// One grid of the hierarchy.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Node {
+    pub res: UVec3,
+    pub first_cell: u32,
+    pub depth: u32,
+    /// Insertion margin of this node's cells, in cells.
+    pub margin: f32,
+    /// Product of the resolutions on the path from the top grid, per axis: one of this node's
+    /// cells is `1/scale` of a top-grid cell.
+    pub scale: Vec3,
+}
+
+/// A hierarchy of uniform grids (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hierarchy {
+    /// The top grid's box and resolution.
+    pub geom: GridGeometry,
+    pub nodes: Vec<Node>,
+    pub cells: Vec<[u32; 2]>,
+    pub refs: Vec<u32>,
+}
+
+/// Size figures of a hierarchy.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct HierarchyStats {
+    pub nodes: u64,
+    pub levels: u32,
+    pub cells: u64,
+    pub leaves: u64,
+    pub empty_leaves: u64,
+    pub refs: u64,
+    /// Number of grids (nodes) at each depth, top = 0.
+    pub nodes_per_depth: Vec<u64>,
+    /// Number of references held in leaves at each depth.
+    pub refs_per_depth: Vec<u64>,
+    pub memory_bytes: u64,
+}
+
+/// The margin (in cells) a node with accumulated `scale` needs: f32 coordinates of the top grid
+/// (up to its resolution) carry a relative error of a few ulps, magnified by `scale` in child
+/// cells.
+pub fn child_margin(top_res: UVec3, scale: Vec3) -> f64 {
+    let err = 16.0 * f32::EPSILON as f64 * top_res.max_element() as f64 * scale.max_element() as f64;
+    err.max(INSERT_MARGIN_CELLS)
+}
+
+impl Hierarchy {
+    pub fn memory_bytes(&self) -> u64 {
+        (self.nodes.len() * std::mem::size_of::<Node>() + self.cells.len() * 8 + self.refs.len() * 4) as u64
+    }
+
+    pub fn stats(&self) -> HierarchyStats {
+        let mut s = HierarchyStats {
+            nodes: self.nodes.len() as u64,
+            cells: self.cells.len() as u64,
+            refs: self.refs.len() as u64,
+            ..Default::default()
+        };
+        for n in &self.nodes {
+            let d = n.depth as usize;
+            if s.nodes_per_depth.len() <= d {
+                s.nodes_per_depth.resize(d + 1, 0);
+                s.refs_per_depth.resize(d + 1, 0);
+            }
+            s.nodes_per_depth[d] += 1;
+            let count = (n.res.x * n.res.y * n.res.z) as usize;
+            for c in &self.cells[n.first_cell as usize..n.first_cell as usize + count] {
+                if c[1] != CHILD {
+                    s.leaves += 1;
+                    s.empty_leaves += (c[1] == 0) as u64;
+                    s.refs_per_depth[d] += c[1] as u64;
+                }
+            }
+        }
+        s.levels = s.nodes_per_depth.len() as u32;
+        s.memory_bytes = self.memory_bytes();
+        s
+    }
+
+    /// Closest hit (see the module doc).
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
+        let mut best = Hit::MISS;
+        let mut stats = RayStats::default();
+        let Some(pr) = PreparedRay::new(ray) else { return (best, stats) };
+        let Some(top) = self.geom.clip(&pr) else { return (best, stats) };
+        let mut mb = Mailbox::default();
+        struct Frame {
+            node: u32,
+            ray: GridRay,
+            walker: Walker,
+            t_enter: f32,
+        }
+        let mut stack: Vec<Frame> = Vec::with_capacity(MAX_DEPTH);
+        stack.push(Frame {
+            node: 0,
+            ray: top,
+            walker: Walker::new(traversal, &top, self.nodes[0].res),
+            t_enter: top.t0,
+        });
+        while let Some(f) = stack.last_mut() {
+            let Some(step) = f.walker.next() else {
+                stack.pop();
+                continue;
+            };
+            stats.cells += 1;
+            let node = &self.nodes[f.node as usize];
+            let idx = node.first_cell as usize
+                + (step.cell.x + node.res.x * (step.cell.y + node.res.y * step.cell.z)) as usize;
+            let [a, b] = self.cells[idx];
+            let t_enter = f.t_enter;
+            f.t_enter = step.t_exit;
+            if b == CHILD {
+                let child = &self.nodes[a as usize];
+                let r = f.ray.child(step.cell, child.res, t_enter, step.t_exit);
+                let walker = Walker::new(traversal, &r, child.res);
+                stack.push(Frame { node: a, ray: r, walker, t_enter: r.t0 });
+                continue;
+            }
+            for &tri in &self.refs[a as usize..(a + b) as usize] {
+                if mailbox && mb.check_and_insert(tri) {
+                    continue;
+                }
+                stats.tests += 1;
+                if let Some(h) = intersect(&pr, &tris[tri as usize])
+                    && closer(h.t, tri, best.t, best.triangle)
+                {
+                    best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
+                }
+            }
+            if best.t < step.t_exit {
+                break;
+            }
+        }
+        (best, stats)
+    }
+}
+
+/// The grid geometry of the cell `c` of a grid `parent`, subdivided into `res` cells.
+pub fn cell_geometry(parent: &GridGeometry, c: UVec3, res: UVec3) -> GridGeometry {
+    let min = parent.min + c.as_vec3() * parent.cell;
+    let cell = parent.cell / res.as_vec3();
+    GridGeometry { min, max: min + parent.cell, res, cell, inv_cell: Vec3::ONE / cell }
+}

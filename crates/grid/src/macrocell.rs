@@ -1,0 +1,184 @@
+//! Macrocells (Parker et al. 1999): a coarse occupancy grid over A×A×A blocks of a flat grid.
+//!
+//! The ray walks the macro grid first; an empty macrocell is crossed in one step, and only
+//! inside an occupied one does it walk the fine cells of that block. The fine grid's resolution
+//! is rounded up to a multiple of A on every axis, so macrocell boundaries are exactly fine-cell
+//! boundaries; A is a power of two, so the macro grid-space ray is the fine one scaled by 1/A
+//! without rounding.
+//!
+//! # Layout (GPU-ready: flat arrays, indices only)
+//! - the fine grid: `cell_start` (M + 1 u32) and `refs` (u32), as [`FlatGrid`];
+//! - `occupancy`: one u32 word per 32 macrocells, bit `i % 32` of word `i / 32` set when
+//!   macrocell `i` (x fastest) holds at least one reference.
+//!
+//! # Choosing A
+//! By default A is chosen by the cost model: a ray crossing m fine cells crosses about m/A
+//! macrocells and, in the fraction f_A of them that is occupied, about A fine cells each, so the
+//! stepping cost is ≈ (m/A + f_A·m)·Tstep (the intersection term does not depend on A). f_A is
+//! counted exactly for A ∈ {2, 4, 8, 16}; the A minimising 1/A + f_A wins.
+
+use glam::{UVec3, Vec3};
+use gridrt_scene::{Hit, Ray};
+use serde::Serialize;
+
+use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
+use crate::geometry::{GridGeometry, GridRay};
+use crate::mailbox::Mailbox;
+use crate::stats::RayStats;
+use crate::traversal::{Traversal, Walker};
+use crate::triangle::{PreparedRay, closer, intersect};
+use crate::{BuildError, triangle_bounds};
+
+/// Macrocell sizes the cost model chooses among.
+pub const MACRO_SIZES: [u32; 4] = [2, 4, 8, 16];
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct MacrocellGrid {
+    pub fine: FlatGrid,
+    /// Fine cells per macrocell edge (a power of two).
+    pub a: u32,
+    /// Macro grid resolution (fine resolution / A).
+    pub macro_res: UVec3,
+    /// One bit per macrocell, x fastest.
+    pub occupancy: Vec<u32>,
+}
+
+/// Occupancy figures for one candidate A.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MacroSample {
+    pub a: u32,
+    pub macro_cells: u64,
+    pub occupied: u64,
+    /// 1/A + f_A: the relative stepping cost the choice minimises.
+    pub cost: f64,
+}
+
+impl MacrocellGrid {
+    /// Builds the fine grid at `res` (rounded up to multiples of A) and the macro occupancy.
+    /// `a = None` lets the cost model choose A (see the module doc).
+    pub fn build(
+        tris: &[[Vec3; 3]],
+        res: [u32; 3],
+        a: Option<u32>,
+        opts: BuildOptions,
+        times: &mut PhaseTimes,
+    ) -> Result<(MacrocellGrid, Vec<MacroSample>), BuildError> {
+        let bounds = triangle_bounds(tris);
+        let (a, samples) = match a {
+            Some(a) => {
+                if !a.is_power_of_two() || a > 64 {
+                    return Err(BuildError::InvalidParameter(format!(
+                        "macrocell size {a} must be a power of two ≤ 64"
+                    )));
+                }
+                (a, Vec::new())
+            }
+            None => {
+                // Occupancy of each candidate A, from a fine grid at a resolution divisible by 16.
+                let probe = times.record("macro-size", || -> Result<Vec<MacroSample>, BuildError> {
+                    let geom = GridGeometry::new(&bounds, round_up(res, 16));
+                    let fine = FlatGrid::build(tris, geom, opts, &mut PhaseTimes::default())?;
+                    Ok(MACRO_SIZES.iter().map(|&a| sample(&fine, a)).collect())
+                })?;
+                let best = probe.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)).expect("four samples");
+                (best.a, probe)
+            }
+        };
+        let geom = GridGeometry::new(&bounds, round_up(res, a));
+        let fine = FlatGrid::build(tris, geom, opts, times)?;
+        let grid = times.record("occupancy", || from_fine(fine, a));
+        Ok((grid, samples))
+    }
+
+    pub fn memory_bytes(&self) -> u64 {
+        self.fine.memory_bytes() + self.occupancy.len() as u64 * 4
+    }
+
+    #[inline]
+    pub fn occupied(&self, m: UVec3) -> bool {
+        let i = (m.x + self.macro_res.x * (m.y + self.macro_res.y * m.z)) as usize;
+        self.occupancy[i / 32] & (1 << (i % 32)) != 0
+    }
+
+    pub fn occupied_count(&self) -> u64 {
+        self.occupancy.iter().map(|w| w.count_ones() as u64).sum()
+    }
+
+    /// Closest hit: macro walk, fine walk inside occupied macrocells.
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
+        let mut best = Hit::MISS;
+        let mut stats = RayStats::default();
+        let Some(pr) = PreparedRay::new(ray) else { return (best, stats) };
+        let Some(fine_ray) = self.fine.geom.clip(&pr) else { return (best, stats) };
+        let a = self.a as f32;
+        // Exact: A is a power of two.
+        let macro_ray = GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..fine_ray };
+        let block = UVec3::splat(self.a);
+        let mut mb = Mailbox::default();
+        let mut t_enter = fine_ray.t0;
+        for m in Walker::new(traversal, &macro_ray, self.macro_res) {
+            stats.cells += 1;
+            let t_exit = m.t_exit;
+            if self.occupied(m.cell) {
+                let lo = m.cell * self.a;
+                let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0: t_enter, t1: t_exit, ..fine_ray };
+                for step in Walker::new(traversal, &sub, block) {
+                    stats.cells += 1;
+                    let c = lo + step.cell;
+                    for &tri in self.fine.cell(self.fine.geom.cell_index(c)) {
+                        if mailbox && mb.check_and_insert(tri) {
+                            continue;
+                        }
+                        stats.tests += 1;
+                        if let Some(h) = intersect(&pr, &tris[tri as usize])
+                            && closer(h.t, tri, best.t, best.triangle)
+                        {
+                            best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
+                        }
+                    }
+                    if best.t < step.t_exit {
+                        return (best, stats);
+                    }
+                }
+            }
+            if best.t < t_exit {
+                break;
+            }
+            t_enter = t_exit;
+        }
+        (best, stats)
+    }
+}
+
+fn round_up(res: [u32; 3], a: u32) -> [u32; 3] {
+    res.map(|r| r.max(1).div_ceil(a) * a)
+}
+
+fn sample(fine: &FlatGrid, a: u32) -> MacroSample {
+    let g = from_fine(fine.clone(), a);
+    let cells = g.macro_res.x as u64 * g.macro_res.y as u64 * g.macro_res.z as u64;
+    let occupied = g.occupied_count();
+    MacroSample { a, macro_cells: cells, occupied, cost: 1.0 / a as f64 + occupied as f64 / cells as f64 }
+}
+
+/// Macro occupancy of a fine grid whose resolution is a multiple of `a`.
+fn from_fine(fine: FlatGrid, a: u32) -> MacrocellGrid {
+    let res = fine.geom.res;
+    let macro_res = UVec3::new(res.x.div_ceil(a), res.y.div_ceil(a), res.z.div_ceil(a));
+    let n = macro_res.x as usize * macro_res.y as usize * macro_res.z as usize;
+    let mut occupancy = vec![0u32; n.div_ceil(32)];
+    for z in 0..res.z {
+        for y in 0..res.y {
+            for x in 0..res.x {
+                let c = UVec3::new(x, y, z);
+                let i = fine.geom.cell_index(c);
+                if fine.cell_start[i + 1] > fine.cell_start[i] {
+                    let m = c / a;
+                    let k = (m.x + macro_res.x * (m.y + macro_res.y * m.z)) as usize;
+                    occupancy[k / 32] |= 1 << (k % 32);
+                }
+            }
+        }
+    }
+    MacrocellGrid { fine, a, macro_res, occupancy }
+}

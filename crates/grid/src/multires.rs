@@ -1,0 +1,270 @@
+//! Multi-resolution grids (Jevans & Wyvill 1989): top-down recursive subdivision. A cell whose
+//! triangles are costly to test becomes a sub-grid of its own; leaves hold triangle lists.
+//! Layout and traversal: [`crate::hierarchy`].
+//!
+//! # Build policies (the sub-grid resolution R of a cell with n triangles)
+//! - [`Policy::Octree`]: R = 2×2×2 (an octree-like grid);
+//! - [`Policy::Constant`]: R = k×k×k for every sub-grid;
+//! - [`Policy::Adaptive`] (default): R from the cell's own triangle count, about λ·n cells,
+//!   near-cubic (λ = [`MultiresOptions::density`]);
+//! - [`Policy::MaxDepth`]: octree-like, every cell with more than `leaf_size` triangles is
+//!   subdivided down to the depth limit, ignoring the cost model (the naive policy, for
+//!   comparison).
+//!
+//! # When to subdivide (the survey's cost criterion)
+//! For the first three policies a cell with n triangles is subdivided only while the sub-grid is
+//! predicted cheaper than testing every triangle: Tsetup + m·Tstep + μ·Tinter < n·Tinter, where
+//! m = ∛(R.x·R.y·R.z) and μ = N_m/m², N_m counted exactly by bucketing the n triangles into the
+//! candidate sub-grid. [`MultiresOptions::max_depth`] guards the recursion, and so does the
+//! f32 precision bound of [`crate::hierarchy::MAX_CHILD_MARGIN`].
+//!
+//! The build is deterministic; with `parallel` the subtrees of the top grid's cells are built
+//! on all threads and concatenated in cell order, bit-identical to the serial build.
+
+use glam::{UVec3, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
+use crate::geometry::GridGeometry;
+use crate::hierarchy::{CHILD, Hierarchy, MAX_CHILD_MARGIN, MAX_DEPTH, Node, cell_geometry, child_margin};
+use crate::insert::{InsertMode, bucket};
+use crate::resolution::CostModel;
+use crate::{BuildError, triangle_bounds};
+
+/// Largest sub-grid resolution per axis.
+pub const MAX_SUB_RES: u32 = 64;
+
+/// How sub-grid resolutions are chosen (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Policy {
+    Octree,
+    MaxDepth { leaf_size: u32 },
+    Constant(u32),
+    Adaptive,
+}
+
+impl std::str::FromStr for Policy {
+    type Err = String;
+    /// `octree | max-depth[=leaf_size] | constant[=k] | adaptive`
+    fn from_str(s: &str) -> Result<Policy, String> {
+        let (name, arg) = s.split_once('=').map_or((s, None), |(a, b)| (a, Some(b)));
+        let num = |d: u32| arg.map_or(Ok(d), |v| v.parse::<u32>().map_err(|_| format!("bad number in \"{s}\"")));
+        match name {
+            "octree" => Ok(Policy::Octree),
+            "adaptive" => Ok(Policy::Adaptive),
+            "constant" => {
+                let k = num(4)?;
+                if (2..=MAX_SUB_RES).contains(&k) {
+                    Ok(Policy::Constant(k))
+                } else {
+                    Err(format!("constant=k needs 2 ≤ k ≤ {MAX_SUB_RES}"))
+                }
+            }
+            "max-depth" => Ok(Policy::MaxDepth { leaf_size: num(8)?.max(1) }),
+            _ => {
+                Err(format!("unknown policy \"{s}\": expected octree, max-depth[=leaf_size], constant[=k] or adaptive"))
+            }
+        }
+    }
+}
+
+/// Multi-resolution build settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MultiresOptions {
+    pub policy: Policy,
+    /// Deepest sub-grid level (the top grid is depth 0); at most [`MAX_DEPTH`] − 1.
+    pub max_depth: u32,
+    /// Cells per triangle of an adaptive sub-grid.
+    pub density: f64,
+    pub cost: CostModel,
+    /// Subdivide every non-empty cell, skipping the cost test (the two-level grid does this).
+    pub always_subdivide: bool,
+}
+
+impl Default for MultiresOptions {
+    fn default() -> Self {
+        MultiresOptions {
+            policy: Policy::Adaptive,
+            max_depth: 3,
+            density: 1.0,
+            cost: CostModel::default(),
+            always_subdivide: false,
+        }
+    }
+}
+
+/// A built subtree with node/cell/ref indices local to it; node 0 is its root.
+#[derive(Default)]
+struct Subtree {
+    nodes: Vec<Node>,
+    cells: Vec<[u32; 2]>,
+    refs: Vec<u32>,
+}
+
+impl Subtree {
+    /// Appends `child`, rebasing its indices; returns the child's root node index.
+    fn append(&mut self, child: Subtree) -> u32 {
+        let (n0, c0, r0) = (self.nodes.len() as u32, self.cells.len() as u32, self.refs.len() as u32);
+        self.nodes.extend(child.nodes.into_iter().map(|n| Node { first_cell: n.first_cell + c0, ..n }));
+        self.cells.extend(child.cells.into_iter().map(|[a, b]| if b == CHILD { [a + n0, b] } else { [a + r0, b] }));
+        self.refs.extend(child.refs);
+        n0
+    }
+}
+
+struct Ctx<'a> {
+    tris: &'a [[Vec3; 3]],
+    opts: MultiresOptions,
+    insert: InsertMode,
+    top_res: UVec3,
+}
+
+impl Ctx<'_> {
+    /// Sub-grid resolution for a cell of extent `ext` holding `n` triangles.
+    fn sub_res(&self, ext: Vec3, n: usize) -> UVec3 {
+        let r = match self.opts.policy {
+            Policy::Octree | Policy::MaxDepth { .. } => UVec3::splat(2),
+            Policy::Constant(k) => UVec3::splat(k),
+            Policy::Adaptive => {
+                let v = ext.x as f64 * ext.y as f64 * ext.z as f64;
+                let side = (v / (self.opts.density * n as f64).max(1.0)).cbrt();
+                UVec3::from_array([0, 1, 2].map(|a| (ext[a] as f64 / side).round() as u32))
+            }
+        };
+        r.clamp(UVec3::ONE, UVec3::splat(MAX_SUB_RES))
+    }
+
+    /// Builds the subtree for cell `c` of `parent` holding triangles `ids`, or `None` to keep
+    /// it a leaf.
+    fn subdivide(
+        &self,
+        parent: &GridGeometry,
+        parent_scale: Vec3,
+        c: UVec3,
+        ids: &[u32],
+        depth: u32,
+    ) -> Result<Option<Subtree>, BuildError> {
+        let n = ids.len();
+        if n == 0 || depth > self.opts.max_depth.min(MAX_DEPTH as u32 - 1) {
+            return Ok(None);
+        }
+        if let Policy::MaxDepth { leaf_size } = self.opts.policy
+            && n <= leaf_size as usize
+        {
+            return Ok(None);
+        }
+        let res = self.sub_res(parent.cell, n);
+        if res == UVec3::ONE {
+            return Ok(None);
+        }
+        let scale = parent_scale * res.as_vec3();
+        let margin = child_margin(self.top_res, scale);
+        if margin > MAX_CHILD_MARGIN {
+            return Ok(None);
+        }
+        let geom = cell_geometry(parent, c, res);
+        let (cell_start, refs) = bucket(self.tris, Some(ids), &geom, self.insert, margin, None)?;
+        let cost_based = !matches!(self.opts.policy, Policy::MaxDepth { .. }) && !self.opts.always_subdivide;
+        if cost_based {
+            let cells = geom.cell_count();
+            let m = self.opts.cost;
+            if !(m.cost(cells, refs.len() as u64) < n as f64 * m.t_inter) {
+                return Ok(None);
+            }
+        }
+        let mut sub = Subtree::default();
+        sub.nodes.push(Node { res, first_cell: 0, depth, margin: margin as f32, scale });
+        sub.cells = vec![[0, 0]; geom.cell_count() as usize];
+        for z in 0..res.z {
+            for y in 0..res.y {
+                for x in 0..res.x {
+                    let cc = UVec3::new(x, y, z);
+                    let i = geom.cell_index(cc);
+                    let cell_ids = &refs[cell_start[i] as usize..cell_start[i + 1] as usize];
+                    match self.subdivide(&geom, scale, cc, cell_ids, depth + 1)? {
+                        Some(child) => {
+                            let k = sub.append(child);
+                            sub.cells[i] = [k, CHILD];
+                        }
+                        None => {
+                            sub.cells[i] = [sub.refs.len() as u32, cell_ids.len() as u32];
+                            sub.refs.extend_from_slice(cell_ids);
+                        }
+                    }
+                    if sub.refs.len() as u64 > crate::flat::MAX_REFS {
+                        return Err(BuildError::TooManyReferences {
+                            refs: sub.refs.len() as u64,
+                            limit: crate::flat::MAX_REFS,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(Some(sub))
+    }
+}
+
+/// Builds a multi-resolution grid whose top grid has resolution `top_res`.
+pub fn build(
+    tris: &[[Vec3; 3]],
+    top_res: [u32; 3],
+    opts: MultiresOptions,
+    build: BuildOptions,
+    times: &mut PhaseTimes,
+) -> Result<Hierarchy, BuildError> {
+    if !(opts.density > 0.0 && opts.density.is_finite()) {
+        return Err(BuildError::InvalidParameter(format!("density {} must be positive", opts.density)));
+    }
+    let bounds = times.record("bounds", || triangle_bounds(tris));
+    let geom = GridGeometry::new(&bounds, top_res);
+    let top = FlatGrid::build(tris, geom, build, times)?;
+    let ctx = Ctx { tris, opts, insert: build.insert, top_res: geom.res };
+    let cells = geom.cell_count() as usize;
+    let one = |i: usize| -> Result<Option<Subtree>, BuildError> {
+        let c = UVec3::new(
+            i as u32 % geom.res.x,
+            (i as u32 / geom.res.x) % geom.res.y,
+            i as u32 / (geom.res.x * geom.res.y),
+        );
+        ctx.subdivide(&geom, Vec3::ONE, c, top.cell(i), 1)
+    };
+    let subtrees: Vec<Option<Subtree>> =
+        times.record("subdivide", || -> Result<Vec<Option<Subtree>>, BuildError> {
+            #[cfg(feature = "parallel")]
+            if build.parallel {
+                use rayon::prelude::*;
+                return (0..cells).into_par_iter().map(one).collect();
+            }
+            (0..cells).map(one).collect()
+        })?;
+    let total: u64 = subtrees.iter().flatten().map(|s| s.refs.len() as u64).sum::<u64>() + top.refs.len() as u64;
+    if total > crate::flat::MAX_REFS {
+        return Err(BuildError::TooManyReferences { refs: total, limit: crate::flat::MAX_REFS });
+    }
+    let h = times.record("assemble", || {
+        let mut root = Subtree::default();
+        root.nodes.push(Node {
+            res: geom.res,
+            first_cell: 0,
+            depth: 0,
+            margin: crate::geometry::INSERT_MARGIN_CELLS as f32,
+            scale: Vec3::ONE,
+        });
+        root.cells = vec![[0, 0]; cells];
+        for (i, sub) in subtrees.into_iter().enumerate() {
+            match sub {
+                Some(s) => {
+                    let k = root.append(s);
+                    root.cells[i] = [k, CHILD];
+                }
+                None => {
+                    let ids = top.cell(i);
+                    root.cells[i] = [root.refs.len() as u32, ids.len() as u32];
+                    root.refs.extend_from_slice(ids);
+                }
+            }
+        }
+        Hierarchy { geom, nodes: root.nodes, cells: root.cells, refs: root.refs }
+    });
+    Ok(h)
+}

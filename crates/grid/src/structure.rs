@@ -1,0 +1,289 @@
+//! One front door to every grid structure: pick a [`GridKind`] and its options, build, trace,
+//! report. The CLI, the GPU crate and the app all go through here.
+
+use glam::Vec3;
+use gridrt_scene::{Hit, Ray};
+use serde::{Deserialize, Serialize};
+
+use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
+use crate::geometry::GridGeometry;
+use crate::hierarchy::{Hierarchy, HierarchyStats};
+use crate::macrocell::{MacroSample, MacrocellGrid};
+use crate::multires::MultiresOptions;
+use crate::proximity::ProximityGrid;
+use crate::resolution::{self, CostModel, Resolution, ResolutionChoice};
+use crate::stats::{BatchStats, RayStats};
+use crate::trace::{TraceOptions, trace_batch, trace_flat};
+use crate::twolevel::TwoLevelOptions;
+use crate::{BuildError, triangle_bounds};
+
+/// The structures (`--grid`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum GridKind {
+    #[default]
+    Flat,
+    Macrocell,
+    Multires,
+    TwoLevel,
+    Proximity,
+}
+
+impl GridKind {
+    pub const ALL: [GridKind; 5] =
+        [GridKind::Flat, GridKind::Macrocell, GridKind::Multires, GridKind::TwoLevel, GridKind::Proximity];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            GridKind::Flat => "flat",
+            GridKind::Macrocell => "macrocell",
+            GridKind::Multires => "multires",
+            GridKind::TwoLevel => "twolevel",
+            GridKind::Proximity => "proximity",
+        }
+    }
+}
+
+impl std::str::FromStr for GridKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<GridKind, String> {
+        GridKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| format!("unknown grid \"{s}\": expected flat, macrocell, multires, twolevel or proximity"))
+    }
+}
+
+impl std::fmt::Display for GridKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Everything that decides how a structure is built.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GridConfig {
+    pub kind: GridKind,
+    /// Resolution of the flat grid / the fine grid of macrocells / the top grid of the
+    /// hierarchies. `None`: each kind's default (auto, except the two-level grid's λ₁·N).
+    pub resolution: Option<Resolution>,
+    pub build: BuildOptions,
+    pub cost: CostModel,
+    /// Macrocell edge in fine cells (power of two); `None`: chosen by the cost model.
+    pub macro_size: Option<u32>,
+    pub multires: MultiresOptions,
+    pub twolevel: TwoLevelOptions,
+}
+
+impl Default for GridConfig {
+    fn default() -> Self {
+        GridConfig {
+            kind: GridKind::Flat,
+            resolution: None,
+            build: BuildOptions { insert: Default::default(), parallel: true },
+            cost: CostModel::default(),
+            macro_size: None,
+            multires: MultiresOptions::default(),
+            twolevel: TwoLevelOptions::default(),
+        }
+    }
+}
+
+/// A built structure of any kind.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnyGrid {
+    Flat(FlatGrid),
+    Macrocell(MacrocellGrid),
+    Multires(Hierarchy),
+    TwoLevel(Hierarchy),
+    Proximity(ProximityGrid),
+}
+
+/// What a build did: the resolution choice, macro-size samples, times, sizes.
+#[derive(Clone, Debug, Serialize)]
+pub struct BuildReport {
+    pub kind: GridKind,
+    pub triangles: usize,
+    pub resolution_choice: Option<ResolutionChoice>,
+    pub macro_samples: Vec<MacroSample>,
+    pub times: PhaseTimes,
+    pub stats: StructureStats,
+}
+
+/// Size figures common to all kinds (`gridrt build --json`).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct StructureStats {
+    /// Resolution of the flat / fine / top grid.
+    pub resolution: [u32; 3],
+    /// Grids in the structure (1 for flat grids; macro + fine for macrocells).
+    pub nodes: u64,
+    pub levels: u32,
+    /// Cells over all levels.
+    pub cells: u64,
+    pub empty_cells: u64,
+    pub refs: u64,
+    /// Grids per depth (hierarchies), or cells per level (macro, fine) for macrocells.
+    pub depth_histogram: Vec<u64>,
+    pub memory_bytes: u64,
+    pub memory_bytes_per_triangle: f64,
+    /// Macrocell edge, when the structure has macrocells.
+    pub macro_size: Option<u32>,
+    pub occupied_macrocells: Option<u64>,
+    /// Cells whose proximity distance lets a ray jump (distance ≥ 2).
+    pub jump_cells: Option<u64>,
+    pub hierarchy: Option<HierarchyStats>,
+}
+
+fn flat_stats(g: &FlatGrid, n: usize) -> StructureStats {
+    let s = g.stats(n);
+    StructureStats {
+        resolution: s.resolution,
+        nodes: 1,
+        levels: 1,
+        cells: s.cells,
+        empty_cells: s.empty_cells,
+        refs: s.refs,
+        depth_histogram: vec![1],
+        memory_bytes: s.memory_bytes,
+        ..Default::default()
+    }
+}
+
+impl AnyGrid {
+    pub fn kind(&self) -> GridKind {
+        match self {
+            AnyGrid::Flat(_) => GridKind::Flat,
+            AnyGrid::Macrocell(_) => GridKind::Macrocell,
+            AnyGrid::Multires(_) => GridKind::Multires,
+            AnyGrid::TwoLevel(_) => GridKind::TwoLevel,
+            AnyGrid::Proximity(_) => GridKind::Proximity,
+        }
+    }
+
+    /// The outermost grid's box and resolution.
+    pub fn geometry(&self) -> &GridGeometry {
+        match self {
+            AnyGrid::Flat(g) => &g.geom,
+            AnyGrid::Macrocell(g) => &g.fine.geom,
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => &h.geom,
+            AnyGrid::Proximity(p) => &p.grid.geom,
+        }
+    }
+
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
+        match self {
+            AnyGrid::Flat(g) => trace_flat(g, tris, ray, opts),
+            AnyGrid::Macrocell(g) => g.trace(tris, ray, opts.traversal, opts.mailbox),
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => h.trace(tris, ray, opts.traversal, opts.mailbox),
+            AnyGrid::Proximity(p) => p.trace(tris, ray, opts.traversal, opts.mailbox),
+        }
+    }
+
+    pub fn trace_batch(
+        &self,
+        tris: &[[Vec3; 3]],
+        rays: &[Ray],
+        opts: TraceOptions,
+        parallel: bool,
+    ) -> (Vec<Hit>, BatchStats) {
+        trace_batch(rays, parallel, |r| self.trace(tris, r, opts))
+    }
+
+    pub fn memory_bytes(&self) -> u64 {
+        match self {
+            AnyGrid::Flat(g) => g.memory_bytes(),
+            AnyGrid::Macrocell(g) => g.memory_bytes(),
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => h.memory_bytes(),
+            AnyGrid::Proximity(p) => p.memory_bytes(),
+        }
+    }
+
+    pub fn stats(&self, triangles: usize) -> StructureStats {
+        let mut s = match self {
+            AnyGrid::Flat(g) => flat_stats(g, triangles),
+            AnyGrid::Macrocell(g) => {
+                let mut s = flat_stats(&g.fine, triangles);
+                let macro_cells = g.macro_res.x as u64 * g.macro_res.y as u64 * g.macro_res.z as u64;
+                s.nodes = 2;
+                s.levels = 2;
+                s.depth_histogram = vec![macro_cells, s.cells];
+                s.cells += macro_cells;
+                s.macro_size = Some(g.a);
+                s.occupied_macrocells = Some(g.occupied_count());
+                s
+            }
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => {
+                let hs = h.stats();
+                StructureStats {
+                    resolution: h.geom.res.to_array(),
+                    nodes: hs.nodes,
+                    levels: hs.levels,
+                    cells: hs.cells,
+                    empty_cells: hs.empty_leaves,
+                    refs: hs.refs,
+                    depth_histogram: hs.nodes_per_depth.clone(),
+                    hierarchy: Some(hs),
+                    ..Default::default()
+                }
+            }
+            AnyGrid::Proximity(p) => {
+                let mut s = flat_stats(&p.grid, triangles);
+                s.jump_cells = Some(p.distance.iter().filter(|&&d| d >= 2).count() as u64);
+                s
+            }
+        };
+        s.memory_bytes = self.memory_bytes();
+        s.memory_bytes_per_triangle = s.memory_bytes as f64 / triangles.max(1) as f64;
+        s
+    }
+}
+
+/// Builds the structure `cfg` over `tris`.
+pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildReport), BuildError> {
+    let mut times = PhaseTimes::default();
+    let bounds = times.record("bounds", || triangle_bounds(tris));
+    let choose = |times: &mut PhaseTimes, policy: Resolution| {
+        times.record("resolution", || {
+            resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.insert, cfg.build.parallel)
+        })
+    };
+    let mut macro_samples = Vec::new();
+    let (grid, choice) = match cfg.kind {
+        GridKind::Flat | GridKind::Proximity => {
+            let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto));
+            let g = FlatGrid::build(tris, GridGeometry::new(&bounds, choice.resolution), cfg.build, &mut times)?;
+            let grid = if cfg.kind == GridKind::Flat {
+                AnyGrid::Flat(g)
+            } else {
+                AnyGrid::Proximity(times.record("distance", || ProximityGrid::new(g)))
+            };
+            (grid, Some(choice))
+        }
+        GridKind::Macrocell => {
+            let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto));
+            let (g, samples) = MacrocellGrid::build(tris, choice.resolution, cfg.macro_size, cfg.build, &mut times)?;
+            macro_samples = samples;
+            (AnyGrid::Macrocell(g), Some(choice))
+        }
+        GridKind::Multires => {
+            let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto));
+            let h = crate::multires::build(tris, choice.resolution, cfg.multires, cfg.build, &mut times)?;
+            (AnyGrid::Multires(h), Some(choice))
+        }
+        GridKind::TwoLevel => {
+            let (top, choice) = match cfg.resolution {
+                Some(p) => {
+                    let c = choose(&mut times, p);
+                    (Some(c.resolution), Some(c))
+                }
+                None => (None, None),
+            };
+            let h = crate::twolevel::build(tris, top, cfg.twolevel, cfg.build, &mut times)?;
+            (AnyGrid::TwoLevel(h), choice)
+        }
+    };
+    let stats = grid.stats(tris.len());
+    Ok((
+        grid,
+        BuildReport { kind: cfg.kind, triangles: tris.len(), resolution_choice: choice, macro_samples, times, stats },
+    ))
+}

@@ -1,0 +1,57 @@
+//! Two-level grids (Kalojanov, Billeter & Slusallek 2011): a top grid at low density, and every
+//! non-empty top cell its own leaf grid, with a resolution from its own triangle count.
+//!
+//! Defaults are theirs: top density λ₁ = 1/16 cells per triangle, leaf density λ₂ = 1.2. It is
+//! the multi-resolution structure with depth 1, adaptive leaf resolution and no cost test, so it
+//! shares its builder ([`crate::multires`]) and its compact layout and traversal
+//! ([`crate::hierarchy`]): top cell → leaf grid → leaf cell → reference range.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::flat::{BuildOptions, PhaseTimes};
+use crate::hierarchy::Hierarchy;
+use crate::multires::{MultiresOptions, Policy};
+use crate::resolution::{CostModel, cubic_cells};
+use crate::{BuildError, triangle_bounds};
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TwoLevelOptions {
+    /// Top-grid cells per triangle (λ₁).
+    pub top_density: f64,
+    /// Leaf-grid cells per triangle of each top cell (λ₂).
+    pub leaf_density: f64,
+}
+
+impl Default for TwoLevelOptions {
+    fn default() -> Self {
+        TwoLevelOptions { top_density: 1.0 / 16.0, leaf_density: 1.2 }
+    }
+}
+
+/// The top resolution the two-level grid uses for `tris` (λ₁·N cells, near-cubic).
+pub fn top_resolution(tris: &[[Vec3; 3]], opts: &TwoLevelOptions) -> [u32; 3] {
+    cubic_cells(&triangle_bounds(tris), opts.top_density * tris.len() as f64)
+}
+
+/// Builds a two-level grid; `top_res = None` uses [`top_resolution`].
+pub fn build(
+    tris: &[[Vec3; 3]],
+    top_res: Option<[u32; 3]>,
+    opts: TwoLevelOptions,
+    build: BuildOptions,
+    times: &mut PhaseTimes,
+) -> Result<Hierarchy, BuildError> {
+    if !(opts.top_density > 0.0 && opts.leaf_density > 0.0) {
+        return Err(BuildError::InvalidParameter("two-level densities must be positive".into()));
+    }
+    let top = top_res.unwrap_or_else(|| top_resolution(tris, &opts));
+    let m = MultiresOptions {
+        policy: Policy::Adaptive,
+        max_depth: 1,
+        density: opts.leaf_density,
+        cost: CostModel::default(),
+        always_subdivide: true,
+    };
+    crate::multires::build(tris, top, m, build, times)
+}

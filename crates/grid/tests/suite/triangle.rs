@@ -1,0 +1,73 @@
+//! The watertight triangle test: hits are geometrically real, misses are real misses.
+
+use glam::{DVec3, Vec3};
+use gridrt_grid::triangle::{PreparedRay, intersect};
+use gridrt_scene::Ray;
+use gridrt_scene::rng::Rng;
+
+/// Distance from `p` to triangle `t` (f64).
+fn dist_to_triangle(p: DVec3, t: &[Vec3; 3]) -> f64 {
+    let (a, b, c) = (t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3());
+    let n = (b - a).cross(c - a);
+    if n.length_squared() > 0.0 {
+        let nn = n.normalize();
+        let q = p - nn * nn.dot(p - a);
+        let inside = [(a, b), (b, c), (c, a)].iter().all(|(e0, e1)| (*e1 - *e0).cross(q - *e0).dot(n) >= 0.0);
+        if inside {
+            return (p - q).length();
+        }
+    }
+    let seg = |x: DVec3, y: DVec3| {
+        let d = y - x;
+        let s = if d.length_squared() > 0.0 { ((p - x).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+        (p - (x + d * s)).length()
+    };
+    seg(a, b).min(seg(b, c)).min(seg(c, a))
+}
+
+#[test]
+fn nearly_edge_on_triangle_far_away_is_a_miss() {
+    // Found on Crytek Sponza: in f32 both products of two edge functions round to the same
+    // value, U = V = 0, and the naive test reported a hit ~370 units from the triangle.
+    let ray = Ray {
+        origin: [270.99924, 291.8276, 499.8605],
+        tmin: 0.0,
+        dir: [-0.7298839, 0.0066349804, -0.82833403],
+        tmax: f32::INFINITY,
+    };
+    let tri = [
+        Vec3::new(51.353, 11.4668, -22.1363),
+        Vec3::new(51.3435, 11.5082, -22.1072),
+        Vec3::new(51.3663, 11.4812, -22.1072),
+    ];
+    assert_eq!(intersect(&PreparedRay::new(&ray).unwrap(), &tri), None);
+}
+
+#[test]
+fn every_hit_lies_on_its_triangle() {
+    // Small triangles far from the origin, rays aimed at vertices, edges and near-misses:
+    // a reported hit point must be within rounding distance of the triangle.
+    let mut rng = Rng::new(5);
+    let mut hits = 0;
+    for _ in 0..200_000 {
+        let scale = 10f32.powf(rng.range(-3.0, 1.0));
+        let c = Vec3::new(rng.range(-100.0, 100.0), rng.range(-100.0, 100.0), rng.range(-100.0, 100.0));
+        let t = [c, c + rng.unit_vector() * scale, c + rng.unit_vector() * scale];
+        let o = c + rng.unit_vector() * rng.range(1.0, 800.0);
+        let target = match rng.below(3) {
+            0 => t[rng.below(3) as usize],
+            1 => t[0] + (t[1] - t[0]) * rng.f32(),
+            _ => c + rng.unit_vector() * scale * 2.0,
+        };
+        let ray = Ray::new(o, target - o, 0.0, f32::INFINITY);
+        if let Some(h) = intersect(&PreparedRay::new(&ray).unwrap(), &t) {
+            hits += 1;
+            let p = ray.o().as_dvec3() + ray.d().as_dvec3() * h.t as f64;
+            let tol = 1e-5 * (o - c).length() as f64 + 1e-5;
+            let d = dist_to_triangle(p, &t);
+            assert!(d <= tol, "hit {h:?} is {d} from the triangle (tol {tol}); ray {ray:?} tri {t:?}");
+            assert!(h.u >= 0.0 && h.v >= 0.0 && h.u + h.v <= 1.0 + 1e-6, "{h:?}");
+        }
+    }
+    assert!(hits > 50_000, "{hits}");
+}
