@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use gridrt_grid::{CostModel, Resolution, Traversal};
+use gridrt_grid::multires::{MultiresOptions, Policy};
+use gridrt_grid::twolevel::TwoLevelOptions;
+use gridrt_grid::{BuildOptions, CostModel, GridConfig, GridKind, InsertMode, Resolution, Traversal};
 
 #[derive(Debug, Parser)]
 #[command(name = "gridrt", version, about = "Grid ray tracer and grid-structure laboratory", long_about = None)]
@@ -45,22 +47,16 @@ pub struct InfoArgs {
     pub json: bool,
 }
 
-/// Grid kinds (`--grid`). Later structures join this list.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum GridKind {
-    /// Uniform grid, compact layout (Lagae & Dutré).
-    Flat,
-}
-
 /// Grid construction options shared by `build` and `trace`.
 #[derive(Debug, Args)]
 pub struct GridArgs {
-    /// Grid structure.
-    #[arg(long, value_enum, default_value = "flat")]
+    /// Grid structure: flat, macrocell, multires, twolevel or proximity.
+    #[arg(long, default_value = "flat", value_parser = parse_grid)]
     pub grid: GridKind,
-    /// Resolution: auto (cost-model guess-and-check), density=λ, point, line, m=N, or mx,my,mz.
-    #[arg(long, default_value = "auto", value_parser = parse_resolution)]
-    pub resolution: Resolution,
+    /// Resolution of the flat / fine / top grid: auto (cost-model guess-and-check), density=λ,
+    /// point, line, m=N, or mx,my,mz. Default: auto (twolevel: λ₁·N cells).
+    #[arg(long, value_parser = parse_resolution)]
+    pub resolution: Option<Resolution>,
     /// Insert triangles by exact triangle/box overlap instead of by bounding box.
     #[arg(long)]
     pub exact: bool,
@@ -79,6 +75,32 @@ pub struct GridArgs {
     /// Number of resolutions sampled by guess-and-check.
     #[arg(long, default_value_t = CostModel::default().samples)]
     pub samples: u32,
+    /// macrocell: fine cells per macrocell edge, a power of two (default: chosen by the cost model).
+    #[arg(long)]
+    pub macro_size: Option<u32>,
+    /// multires: sub-grid policy: adaptive, octree, constant[=k], max-depth[=leaf_size].
+    #[arg(long, default_value = "adaptive", value_parser = parse_policy)]
+    pub policy: Policy,
+    /// multires: deepest sub-grid level (top = 0).
+    #[arg(long, default_value_t = MultiresOptions::default().max_depth)]
+    pub max_depth: u32,
+    /// multires: cells per triangle of an adaptive sub-grid.
+    #[arg(long, default_value_t = MultiresOptions::default().density)]
+    pub density: f64,
+    /// twolevel: top-grid cells per triangle (λ₁).
+    #[arg(long, default_value_t = TwoLevelOptions::default().top_density)]
+    pub top_density: f64,
+    /// twolevel: leaf-grid cells per triangle (λ₂).
+    #[arg(long, default_value_t = TwoLevelOptions::default().leaf_density)]
+    pub leaf_density: f64,
+}
+
+fn parse_grid(s: &str) -> Result<GridKind, String> {
+    s.parse()
+}
+
+fn parse_policy(s: &str) -> Result<Policy, String> {
+    s.parse()
 }
 
 fn parse_resolution(s: &str) -> Result<Resolution, String> {
@@ -100,6 +122,30 @@ impl GridArgs {
         );
         anyhow::ensure!((2..=256).contains(&m.samples), "--samples must be in 2..=256");
         Ok(m)
+    }
+
+    /// The full structure configuration these flags describe.
+    pub fn config(&self) -> anyhow::Result<GridConfig> {
+        let cost = self.cost_model()?;
+        anyhow::ensure!(self.max_depth <= 7, "--max-depth must be at most 7");
+        Ok(GridConfig {
+            kind: self.grid,
+            resolution: self.resolution,
+            build: BuildOptions {
+                insert: if self.exact { InsertMode::Exact } else { InsertMode::BoundingBox },
+                parallel: !self.serial,
+            },
+            cost,
+            macro_size: self.macro_size,
+            multires: MultiresOptions {
+                policy: self.policy,
+                max_depth: self.max_depth,
+                density: self.density,
+                cost,
+                always_subdivide: false,
+            },
+            twolevel: TwoLevelOptions { top_density: self.top_density, leaf_density: self.leaf_density },
+        })
     }
 }
 

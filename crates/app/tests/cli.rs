@@ -53,6 +53,16 @@ fn pipeline_gen_info_build_rays_trace() {
     assert!(v["build_ms"]["count"].as_f64().is_some());
     let text = ok(&["build", s(&scene), "--resolution", "10,20,30", "--exact", "--serial"]);
     assert!(text.contains("10 x 20 x 30"), "{text}");
+    for grid in ["macrocell", "multires", "twolevel", "proximity"] {
+        let v: serde_json::Value = serde_json::from_str(&ok(&["build", s(&scene), "--grid", grid, "--json"])).unwrap();
+        for key in ["nodes", "levels", "depth_histogram", "memory_bytes_per_triangle", "build_ms"] {
+            assert!(!v[key].is_null(), "build --grid {grid} --json lacks {key}");
+        }
+        assert_eq!(v["grid"], grid);
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&ok(&["build", s(&scene), "--grid", "multires", "--json"])).unwrap();
+    assert!(v["levels"].as_u64().unwrap() >= 2, "the teapot-in-stadium cell must be subdivided: {v}");
 
     for kind in ["random", "camera", "inside"] {
         let rays = tmp(&format!("{kind}.bin"));
@@ -63,7 +73,19 @@ fn pipeline_gen_info_build_rays_trace() {
         let want = std::fs::read(&reference).unwrap();
         assert_eq!(want.len(), 5000 * 16);
         for traversal in ["aw", "cw", "liu"] {
-            for extra in [&[][..], &["--mailbox", "--exact"][..], &["--resolution", "m=7"][..]] {
+            for extra in [
+                &[][..],
+                &["--mailbox", "--exact"][..],
+                &["--resolution", "m=7"][..],
+                &["--grid", "macrocell", "--mailbox"][..],
+                &["--grid", "macrocell", "--macro-size", "4"][..],
+                &["--grid", "multires"][..],
+                &["--grid", "multires", "--policy", "octree", "--max-depth", "5"][..],
+                &["--grid", "multires", "--policy", "max-depth=2", "--exact"][..],
+                &["--grid", "multires", "--policy", "constant=3"][..],
+                &["--grid", "twolevel", "--mailbox"][..],
+                &["--grid", "proximity"][..],
+            ] {
                 let hits = tmp(&format!("{kind}-{traversal}.hits"));
                 let mut args = vec!["trace", s(&scene), "--rays", s(&rays), "-o", s(&hits), "--traversal", traversal];
                 args.extend_from_slice(extra);
@@ -93,6 +115,9 @@ fn bad_inputs_fail_with_clear_messages() {
     fails(&["build", s(&scene), "--resolution", "bogus"], "bad resolution");
     fails(&["trace", s(&scene), "--rays", s(&bad), "-o", "x", "--traversal", "zigzag"], "unknown traversal");
     fails(&["build", s(&scene), "--t-step", "0"], "Tstep");
+    fails(&["build", s(&scene), "--grid", "octree"], "unknown grid");
+    fails(&["build", s(&scene), "--grid", "macrocell", "--macro-size", "3"], "power of two");
+    fails(&["build", s(&scene), "--grid", "multires", "--policy", "fancy"], "unknown policy");
 }
 
 #[test]

@@ -1,72 +1,77 @@
-//! `gridrt build SCENE`: resolution, cells, references, empty cells, memory, build ms per phase.
+//! `gridrt build SCENE`: resolution, cells, references, empty cells, memory, nodes and levels,
+//! build ms per phase, and the sampled cost curve.
 
 use serde_json::json;
 
-use super::{Built, build_grid, human_bytes};
+use super::{build_grid, human_bytes};
 use crate::cli::BuildArgs;
 
 pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
     let tris = mesh.triangles();
-    let Built { grid, choice, times, options } = build_grid(&tris, &args.grid)?;
-    let stats = grid.stats(tris.len());
+    let cfg = args.grid.config()?;
+    let (_, b) = build_grid(&tris, &args.grid)?;
+    let s = &b.stats;
     if args.json {
         let phases: serde_json::Map<String, serde_json::Value> =
-            times.0.iter().map(|(k, v)| (k.clone(), json!(v))).collect();
+            b.times.0.iter().map(|(k, v)| (k.clone(), json!(v))).collect();
         let out = json!({
             "scene": report.source,
             "triangles": tris.len(),
-            "grid": "flat",
-            "insert": options.insert,
-            "parallel": options.parallel,
-            "threads": if options.parallel { rayon::current_num_threads() } else { 1 },
-            "resolution_policy": choice.policy,
-            "resolution": stats.resolution,
-            "cells": stats.cells,
-            "refs": stats.refs,
-            "empty_cells": stats.empty_cells,
-            "empty_percent": stats.empty_percent,
-            "max_refs_per_cell": stats.max_refs_per_cell,
-            "refs_per_triangle": stats.refs_per_triangle,
-            "memory_bytes": stats.memory_bytes,
-            "memory_bytes_per_triangle": stats.memory_bytes as f64 / tris.len() as f64,
+            "grid": cfg.kind.name(),
+            "config": cfg,
+            "threads": if cfg.build.parallel { rayon::current_num_threads() } else { 1 },
+            "resolution": s.resolution,
+            "nodes": s.nodes,
+            "levels": s.levels,
+            "depth_histogram": s.depth_histogram,
+            "cells": s.cells,
+            "refs": s.refs,
+            "empty_cells": s.empty_cells,
+            "empty_percent": 100.0 * s.empty_cells as f64 / s.cells.max(1) as f64,
+            "memory_bytes": s.memory_bytes,
+            "memory_bytes_per_triangle": s.memory_bytes_per_triangle,
+            "structure": s,
             "build_ms": phases,
-            "build_ms_total": times.total(),
-            "cost_curve": choice.curve,
+            "build_ms_total": b.times.total(),
+            "cost_curve": b.resolution_choice.as_ref().map(|c| &c.curve),
+            "macro_samples": b.macro_samples,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
     println!("scene:        {} ({} triangles)", report.source, tris.len());
     println!(
-        "grid:         flat, {:?} insertion, {}",
-        options.insert,
-        if options.parallel { "parallel" } else { "serial" }
+        "grid:         {}, {:?} insertion, {}",
+        cfg.kind,
+        cfg.build.insert,
+        if cfg.build.parallel { "parallel" } else { "serial" }
     );
-    println!(
-        "resolution:   {} x {} x {} ({:?})",
-        stats.resolution[0], stats.resolution[1], stats.resolution[2], choice.policy
-    );
-    println!("cells:        {}", stats.cells);
-    println!(
-        "refs:         {} ({:.2} per triangle, max {} in one cell)",
-        stats.refs, stats.refs_per_triangle, stats.max_refs_per_cell
-    );
-    println!("empty cells:  {} ({:.1}%)", stats.empty_cells, stats.empty_percent);
-    println!(
-        "memory:       {} ({:.1} bytes per triangle)",
-        human_bytes(stats.memory_bytes),
-        stats.memory_bytes as f64 / tris.len() as f64
-    );
-    let phases: Vec<String> = times.0.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();
-    println!("build ms:     {:.2} total ({})", times.total(), phases.join(", "));
-    if !choice.curve.is_empty() {
+    let r = s.resolution;
+    match &b.resolution_choice {
+        Some(c) => println!("resolution:   {} x {} x {} ({:?})", r[0], r[1], r[2], c.policy),
+        None => println!("resolution:   {} x {} x {} (two-level top density)", r[0], r[1], r[2]),
+    }
+    println!("structure:    {} grids on {} levels, per level {:?}", s.nodes, s.levels, s.depth_histogram);
+    if let Some(a) = s.macro_size {
+        println!("macrocells:   {a}^3 fine cells each, {} occupied", s.occupied_macrocells.unwrap_or(0));
+    }
+    if let Some(j) = s.jump_cells {
+        println!("proximity:    {j} empty cells allow a jump (distance >= 2)");
+    }
+    println!("cells:        {}", s.cells);
+    println!("refs:         {} ({:.2} per triangle)", s.refs, s.refs as f64 / tris.len() as f64);
+    println!("empty cells:  {} ({:.1}%)", s.empty_cells, 100.0 * s.empty_cells as f64 / s.cells.max(1) as f64);
+    println!("memory:       {} ({:.1} bytes per triangle)", human_bytes(s.memory_bytes), s.memory_bytes_per_triangle);
+    let phases: Vec<String> = b.times.0.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();
+    println!("build ms:     {:.2} total ({})", b.times.total(), phases.join(", "));
+    if let Some(choice) = b.resolution_choice.as_ref().filter(|c| !c.curve.is_empty()) {
         println!("cost model T(m) = Tsetup + m*Tstep + (N_m/m^2)*Tinter, sampled:");
         println!("  {:>8} {:>16} {:>12} {:>10} {:>10}", "m", "resolution", "N_m", "mu", "T(m)");
-        for s in &choice.curve {
-            let mark = if s.resolution == choice.resolution { "  <- chosen" } else { "" };
-            let r = format!("{}x{}x{}", s.resolution[0], s.resolution[1], s.resolution[2]);
-            println!("  {:>8.1} {:>16} {:>12} {:>10.2} {:>10.3}{mark}", s.m, r, s.n_m, s.mu, s.cost);
+        for c in &choice.curve {
+            let mark = if c.resolution == choice.resolution { "  <- chosen" } else { "" };
+            let res = format!("{}x{}x{}", c.resolution[0], c.resolution[1], c.resolution[2]);
+            println!("  {:>8.1} {:>16} {:>12} {:>10.2} {:>10.3}{mark}", c.m, res, c.n_m, c.mu, c.cost);
         }
     }
     Ok(())

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use anyhow::Context;
 use glam::Vec3;
-use gridrt_grid::{BuildOptions, FlatGrid, InsertMode, PhaseTimes, ResolutionChoice};
+use gridrt_grid::{AnyGrid, BuildReport, structure};
 use gridrt_scene::{LoadReport, Mesh};
 
 use crate::cli::{GridArgs, SceneArg};
@@ -24,23 +24,10 @@ pub fn load_scene(arg: &SceneArg) -> anyhow::Result<(Mesh, LoadReport)> {
     Ok(gridrt_scene::gltf_load::load_path(Path::new(&arg.scene))?)
 }
 
-/// A built grid with how it was chosen and how long it took.
-pub struct Built {
-    pub grid: FlatGrid,
-    pub choice: ResolutionChoice,
-    pub times: PhaseTimes,
-    pub options: BuildOptions,
-}
-
-pub fn build_grid(tris: &[[Vec3; 3]], args: &GridArgs) -> anyhow::Result<Built> {
-    let options = BuildOptions {
-        insert: if args.exact { InsertMode::Exact } else { InsertMode::BoundingBox },
-        parallel: !args.serial,
-    };
-    let model = args.cost_model()?;
-    let (grid, choice, times) =
-        gridrt_grid::build_flat(tris, args.resolution, &model, options).context("building the grid")?;
-    Ok(Built { grid, choice, times, options })
+/// Builds the structure the grid flags describe.
+pub fn build_grid(tris: &[[Vec3; 3]], args: &GridArgs) -> anyhow::Result<(AnyGrid, BuildReport)> {
+    let cfg = args.config()?;
+    structure::build(tris, &cfg).with_context(|| format!("building the {} grid", cfg.kind))
 }
 
 /// "12.3 MiB" style.

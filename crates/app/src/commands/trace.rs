@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use anyhow::Context;
-use gridrt_grid::trace::{TraceOptions, trace_batch, trace_flat};
+use gridrt_grid::trace::{TraceOptions, trace_batch};
 use gridrt_grid::{BatchStats, Traversal, brute};
 use gridrt_scene::rays::{read_rays, write_hits};
 use serde_json::json;
@@ -25,21 +25,22 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             ("brute force".to_string(), 0.0, hits, stats, start.elapsed().as_secs_f64())
         }
         Backend::Cpu => {
-            let built = build_grid(&tris, &args.grid)?;
+            let (grid, b) = build_grid(&tris, &args.grid)?;
             let opts = TraceOptions { traversal: args.traversal, mailbox: args.mailbox };
             let start = Instant::now();
-            let (hits, stats) = trace_batch(&rays, true, |r| trace_flat(&built.grid, &tris, r, opts));
-            let r = built.grid.geom.res;
+            let (hits, stats) = grid.trace_batch(&tris, &rays, opts, true);
+            let r = b.stats.resolution;
             let label = format!(
-                "flat {}x{}x{} {:?}, {}{}",
-                r.x,
-                r.y,
-                r.z,
-                built.options.insert,
+                "{} {}x{}x{} {:?}, {}{}",
+                grid.kind(),
+                r[0],
+                r[1],
+                r[2],
+                args.grid.config()?.build.insert,
                 args.traversal,
                 if args.mailbox { " + mailbox" } else { "" }
             );
-            (label, built.times.total(), hits, stats, start.elapsed().as_secs_f64())
+            (label, b.times.total(), hits, stats, start.elapsed().as_secs_f64())
         }
     };
     write_hits(&args.output, &hits).with_context(|| format!("writing {}", args.output.display()))?;
