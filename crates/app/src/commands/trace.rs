@@ -18,11 +18,11 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     if args.traversal == Traversal::Bresenham {
         eprintln!("warning: naive Bresenham is incomplete by design and misses hits (survey Figure 1)");
     }
-    let (label, build_ms, hits, stats, secs) = match args.backend {
+    let (label, build_ms, memory, hits, stats, secs) = match args.backend {
         Backend::Brute => {
             let start = Instant::now();
             let (hits, stats) = trace_batch(&rays, true, |r| brute::trace(&tris, r));
-            ("brute force".to_string(), 0.0, hits, stats, start.elapsed().as_secs_f64())
+            ("brute force".to_string(), 0.0, 0, hits, stats, start.elapsed().as_secs_f64())
         }
         Backend::Cpu => {
             let (grid, b) = build_grid(&tris, &args.grid)?;
@@ -40,7 +40,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
                 args.traversal,
                 if args.mailbox { " + mailbox" } else { "" }
             );
-            (label, b.times.total(), hits, stats, start.elapsed().as_secs_f64())
+            (label, b.times.total(), b.stats.memory_bytes, hits, stats, start.elapsed().as_secs_f64())
         }
     };
     write_hits(&args.output, &hits).with_context(|| format!("writing {}", args.output.display()))?;
@@ -59,7 +59,7 @@ fn print_summary(
     if args.json {
         let out = json!({
             "scene": scene, "structure": label, "rays": s.rays, "hits": s.hits,
-            "build_ms": build_ms, "trace_s": secs, "rays_per_s": rays_per_s,
+            "build_ms": build_ms, "memory_bytes": memory, "trace_s": secs, "rays_per_s": rays_per_s,
             "threads": rayon::current_num_threads(),
             "mean_cells_per_ray": s.mean_cells(), "mean_tests_per_ray": s.mean_tests(),
         });
@@ -67,7 +67,7 @@ fn print_summary(
         return Ok(());
     }
     println!("scene:      {scene}");
-    println!("structure:  {label} (build {build_ms:.1} ms)");
+    println!("structure:  {label} (build {build_ms:.1} ms, {})", super::human_bytes(memory));
     println!("rays:       {} ({} hits, {:.1}%)", s.rays, s.hits, 100.0 * s.hits as f64 / s.rays.max(1) as f64);
     println!("time:       {:.3} s, {:.3} Mrays/s on {} threads", secs, rays_per_s / 1e6, rayon::current_num_threads());
     println!("per ray:    {:.2} cells visited, {:.2} triangle tests", s.mean_cells(), s.mean_tests());
