@@ -44,17 +44,20 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         }
     };
     write_hits(&args.output, &hits).with_context(|| format!("writing {}", args.output.display()))?;
-    print_summary(&args, &report.source, &label, build_ms, &stats, secs)
+    let summary = Summary { scene: &report.source, label: &label, build_ms, memory, secs };
+    print_summary(&args, &summary, &stats)
 }
 
-fn print_summary(
-    args: &TraceArgs,
-    scene: &str,
-    label: &str,
+struct Summary<'a> {
+    scene: &'a str,
+    label: &'a str,
     build_ms: f64,
-    s: &BatchStats,
+    memory: u64,
     secs: f64,
-) -> anyhow::Result<()> {
+}
+
+fn print_summary(args: &TraceArgs, m: &Summary, s: &BatchStats) -> anyhow::Result<()> {
+    let Summary { scene, label, build_ms, memory, secs } = *m;
     let rays_per_s = s.rays as f64 / secs.max(1e-9);
     if args.json {
         let out = json!({
