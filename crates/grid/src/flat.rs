@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
-use crate::insert::{InsertMode, bucket, for_each_cell, prepare};
+use crate::insert::{InsertMode, bucket};
 
 /// Largest number of references a grid may hold (u32 offsets; keeps memory bounded).
 pub const MAX_REFS: u64 = 1 << 31;
@@ -144,6 +144,7 @@ mod parallel {
     use rayon::prelude::*;
 
     use super::*;
+    use crate::insert::{for_each_cell, prepare};
 
     pub(super) fn build(
         tris: &[[Vec3; 3]],

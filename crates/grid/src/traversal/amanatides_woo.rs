@@ -1,11 +1,11 @@
 //! Amanatides & Woo (1987) 3DDDA in floating point.
 //!
-//! Per axis: `t_max` (the `t` of the next wall crossing) and `t_delta` (the `t` between two
-//! crossings); each step moves along the axis with the smallest `t_max`. The survey's
-//! incremental update `t_max += t_delta` accumulates one rounding per step (up to ~0.01 cell
-//! after a thousand steps from a distant origin), so this implementation evaluates the same
-//! quantity as `t_max0 + n · t_delta` with `n` the step count on that axis: two roundings,
-//! no drift, same comparisons.
+//! Per axis: `t_max` (the `t` of the next wall crossing); each step moves along the axis with
+//! the smallest `t_max` and advances that axis' crossing. The survey's incremental update
+//! `t_max += t_delta` accumulates one rounding per step (up to ~0.01 cell after a thousand steps
+//! from a distant origin), so this implementation evaluates the same quantity from the integer
+//! wall index, `t_max = (wall − o) · (1/d)`: no drift, same comparisons, and a form no shader
+//! compiler can contract into an FMA, so the WGSL port takes exactly the same steps.
 
 use glam::{IVec3, UVec3, Vec3};
 
@@ -17,9 +17,10 @@ pub struct AmanatidesWoo {
     cell: IVec3,
     step: IVec3,
     res: IVec3,
-    t_max0: Vec3,
-    t_delta: Vec3,
-    n: Vec3,
+    /// Next wall index per axis (as f32: exact for any resolution ≤ 2^24).
+    wall: Vec3,
+    o: Vec3,
+    inv_d: Vec3,
     t_max: Vec3,
     t1: f32,
     done: bool,
@@ -29,27 +30,23 @@ impl AmanatidesWoo {
     pub fn new(ray: &GridRay, res: UVec3) -> AmanatidesWoo {
         let c = ray.start_cell(res);
         let mut step = IVec3::ZERO;
-        let mut t_max0 = Vec3::INFINITY;
-        let mut t_delta = Vec3::ZERO;
+        let mut wall = Vec3::ZERO;
+        let mut t_max = Vec3::INFINITY;
         for a in 0..3 {
-            if ray.d[a] > 0.0 {
-                step[a] = 1;
-                t_max0[a] = (c[a] as f32 + 1.0 - ray.o[a]) * ray.inv_d[a];
-                t_delta[a] = ray.inv_d[a];
-            } else if ray.d[a] < 0.0 {
-                step[a] = -1;
-                t_max0[a] = (c[a] as f32 - ray.o[a]) * ray.inv_d[a];
-                t_delta[a] = -ray.inv_d[a];
+            if ray.d[a] != 0.0 {
+                step[a] = if ray.d[a] > 0.0 { 1 } else { -1 };
+                wall[a] = if ray.d[a] > 0.0 { c[a] as f32 + 1.0 } else { c[a] as f32 };
+                t_max[a] = (wall[a] - ray.o[a]) * ray.inv_d[a];
             }
         }
         AmanatidesWoo {
             cell: c.as_ivec3(),
             step,
             res: res.as_ivec3(),
-            t_max0,
-            t_delta,
-            n: Vec3::ZERO,
-            t_max: t_max0,
+            wall,
+            o: ray.o,
+            inv_d: ray.inv_d,
+            t_max,
             t1: ray.t1,
             done: false,
         }
@@ -74,8 +71,8 @@ impl Iterator for AmanatidesWoo {
             if self.cell[a] < 0 || self.cell[a] >= self.res[a] {
                 self.done = true;
             }
-            self.n[a] += 1.0;
-            self.t_max[a] = self.t_max0[a] + self.n[a] * self.t_delta[a];
+            self.wall[a] += self.step[a] as f32;
+            self.t_max[a] = (self.wall[a] - self.o[a]) * self.inv_d[a];
         }
         Some(out)
     }

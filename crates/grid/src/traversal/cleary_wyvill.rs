@@ -39,7 +39,8 @@ impl ClearyWyvill {
     pub fn new(ray: &GridRay, res: UVec3) -> ClearyWyvill {
         let c = ray.start_cell(res);
         let seg = ray.t1 - ray.t0;
-        let scale = SCALE as f32 / seg;
+        // 2^30 · (1/seg) equals 2^30 / seg exactly, and is what the WGSL port computes.
+        let scale = SCALE as f32 * (1.0 / seg);
         let single = seg.is_nan() || seg <= 0.0 || !scale.is_finite();
         let mut step = IVec3::ZERO;
         let mut dist = [BEYOND; 3];

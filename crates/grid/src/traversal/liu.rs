@@ -6,7 +6,7 @@
 //! in fixed point (20 fractional bits, i32) and advanced by the fixed-point slope `K = d_v/d_u`
 //! with one integer add per slice. When both minor axes cross inside a slice, the one whose
 //! wall lies farther back from the slice end (overshoot / slope: Liu's threshold test,
-//! compared by cross-multiplication) is crossed first.
+//! compared exactly by 64-bit cross-multiplication) is crossed first.
 //!
 //! Error: the slope is rounded once (≤ 2^-21 cell), so after the at most
 //! [`MAX_AXIS_RES`](crate::geometry::MAX_AXIS_RES) = 1024 slices the minor coordinates are off
@@ -51,7 +51,8 @@ pub struct Liu {
 #[inline]
 fn fix(x: f32, hi: i32) -> i32 {
     // Clamp first: a segment end a hair outside the grid must not overflow i32.
-    (x.clamp(-1.0, hi as f32 + 1.0) * ONE).round() as i32
+    // floor(x + 0.5), not round(): WGSL's round() ties to even, Rust's away from zero.
+    (x.clamp(-1.0, hi as f32 + 1.0) * ONE + 0.5).floor() as i32
 }
 
 /// The cell a fixed-point coordinate lies in when moving in direction `s` (a point exactly on
@@ -90,7 +91,9 @@ impl Liu {
         let su = if step[u] == 0 { 1 } else { step[u] };
         step[u] = su;
         let slices_left = ((end_cell[u] - start[u]) * su).max(0);
-        let kf = |a: usize| if ray.d[u] != 0.0 { ray.d[a] / ray.d[u] } else { 0.0 };
+        // d_a · (1/d_u) rather than d_a / d_u: the WGSL port computes the same product (a GPU
+        // division need not be correctly rounded, a reciprocal times a product is the same).
+        let kf = |a: usize| if ray.d[u] != 0.0 { ray.d[a] * ray.inv_d[u] } else { 0.0 };
         // Per slice the driving coordinate moves by su, so the minor ones move by su·d_a/d_u.
         let k = [fix_slope(kf(v) * su as f32), fix_slope(kf(w) * su as f32)];
         let last = [fix(p1[v], res_i[v]), fix(p1[w], res_i[w])];
@@ -151,9 +154,10 @@ impl Liu {
                 // far before the slice end the wall was crossed: the larger one comes first.
                 let wall_v = (self.cell[v] + (sv > 0) as i32) << FRAC_BITS;
                 let wall_w = (self.cell[w] + (sw > 0) as i32) << FRAC_BITS;
-                let ev = (self.end[0] - wall_v).abs() as f32;
-                let ew = (self.end[1] - wall_w).abs() as f32;
-                ev * self.k[1].abs() as f32 >= ew * self.k[0].abs() as f32
+                // Exact 64-bit products (the WGSL port multiplies wide in u32 halves).
+                let ev = (self.end[0] - wall_v).unsigned_abs() as u64;
+                let ew = (self.end[1] - wall_w).unsigned_abs() as u64;
+                ev * self.k[1].unsigned_abs() as u64 >= ew * self.k[0].unsigned_abs() as u64
             };
             if move_v {
                 self.cell[v] += sv;
@@ -189,7 +193,7 @@ impl Liu {
 
 #[inline]
 fn fix_slope(k: f32) -> i32 {
-    (k.clamp(-1.0, 1.0) * ONE).round() as i32
+    (k.clamp(-1.0, 1.0) * ONE + 0.5).floor() as i32
 }
 
 impl Iterator for Liu {

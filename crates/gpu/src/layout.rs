@@ -1,0 +1,81 @@
+//! Data the shaders read and write, as `#[repr(C)]` Pod structs.
+//! Keep in sync with shaders/shared/bindings.wgsl and shaders/shared/hierarchy.wgsl (a test
+//! compares every struct's size and member offsets with naga's layout of the WGSL).
+//! Everything is vec4-aligned: no bare vec3 in storage.
+
+use bytemuck::{Pod, Zeroable};
+
+/// One ray: `origin.xyz, tmin`, `dir.xyz, tmax` (the ray file's record). WGSL `Ray`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuRay {
+    pub origin_tmin: [f32; 4],
+    pub dir_tmax: [f32; 4],
+}
+
+/// Closest hit (the hit file's record). WGSL `Hit`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuHit {
+    pub t: f32,
+    pub triangle: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// Per-ray counters. WGSL `RayStats`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuRayStats {
+    pub cells: u32,
+    pub tests: u32,
+}
+
+/// Per-dispatch parameters (uniform). WGSL `Params`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridParams {
+    /// xyz: grid box minimum.
+    pub grid_min: [f32; 4],
+    /// xyz: 1 / cell size.
+    pub inv_cell: [f32; 4],
+    /// xyz: resolution; w: rays in this dispatch.
+    pub res: [u32; 4],
+    /// x: traversal (0 AW, 1 CW, 2 Liu); y: mailbox; z: macrocell edge; w: first ray.
+    pub options: [u32; 4],
+}
+
+/// One grid of a hierarchy: xyz = resolution, w = first cell. WGSL `Node`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuNode {
+    pub res_first: [u32; 4],
+}
+
+/// Camera for the render pass (uniform). WGSL `Camera` in shaders/shared/render_bindings.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCamera {
+    /// xyz: eye; w: tan(vfov / 2).
+    pub eye: [f32; 4],
+    /// xyz: right (unit); w: image width.
+    pub right: [f32; 4],
+    /// xyz: up (unit); w: image height.
+    pub up: [f32; 4],
+    /// xyz: forward (unit); w: aspect (width / height).
+    pub forward: [f32; 4],
+}
+
+/// Shading parameters (uniform). WGSL `ShadeParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ShadeParams {
+    /// xyz: point light position; w: scene diagonal (shadow-ray offset scale).
+    pub light: [f32; 4],
+    /// x: view (0 shaded, 1 normals, 2 depth, 3 heatmap-cells, 4 heatmap-tests);
+    /// y: heatmap maximum (count mapped to the top colour, as bits of f32);
+    /// z: width; w: height.
+    pub view: [u32; 4],
+    /// x, y: depth range near / far.
+    pub depth: [f32; 4],
+}

@@ -1,0 +1,17 @@
+//! gridrt's GPU passes: the WGSL grid traversals and the render pass, run through wgpu. The
+//! only crate of the workspace that depends on wgpu.
+//!
+//! Data flows one way: a built structure ([`gridrt_grid::AnyGrid`]) → GPU buffers
+//! ([`upload`]) → a trace kernel per structure (`shaders/<kind>.wgsl`, [`trace`]) → hits and
+//! per-ray stats; the render pass ([`render`]) adds camera rays, shadow rays and shading.
+
+pub mod context;
+pub mod cpu;
+pub mod layout;
+pub mod render;
+pub mod shaders;
+pub mod trace;
+pub mod upload;
+
+pub use context::{GpuContext, GpuError};
+pub use trace::Tracer;

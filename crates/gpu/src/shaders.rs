@@ -1,0 +1,61 @@
+//! The WGSL sources, embedded at compile time (`include_str!`) so binaries and the wasm build
+//! carry them, and their composition: a line `//!include shared/x.wgsl` is replaced by that
+//! file (itself composed), each file at most once per module.
+
+/// Every WGSL file under `shaders/`, by its path relative to that folder.
+pub const SOURCES: &[(&str, &str)] = &[
+    ("flat.wgsl", include_str!("../../../shaders/flat.wgsl")),
+    ("macrocell.wgsl", include_str!("../../../shaders/macrocell.wgsl")),
+    ("multires.wgsl", include_str!("../../../shaders/multires.wgsl")),
+    ("twolevel.wgsl", include_str!("../../../shaders/twolevel.wgsl")),
+    ("proximity.wgsl", include_str!("../../../shaders/proximity.wgsl")),
+    ("camera.wgsl", include_str!("../../../shaders/camera.wgsl")),
+    ("shadow.wgsl", include_str!("../../../shaders/shadow.wgsl")),
+    ("shade.wgsl", include_str!("../../../shaders/shade.wgsl")),
+    ("shared/types.wgsl", include_str!("../../../shaders/shared/types.wgsl")),
+    ("shared/bindings.wgsl", include_str!("../../../shaders/shared/bindings.wgsl")),
+    ("shared/ray.wgsl", include_str!("../../../shaders/shared/ray.wgsl")),
+    ("shared/triangle.wgsl", include_str!("../../../shaders/shared/triangle.wgsl")),
+    ("shared/walker.wgsl", include_str!("../../../shaders/shared/walker.wgsl")),
+    ("shared/trace_common.wgsl", include_str!("../../../shaders/shared/trace_common.wgsl")),
+    ("shared/hierarchy.wgsl", include_str!("../../../shaders/shared/hierarchy.wgsl")),
+    ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
+];
+
+/// Error composing a shader: an unknown file or include.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("shader {file}: {detail}")]
+pub struct ComposeError {
+    pub file: String,
+    pub detail: String,
+}
+
+pub fn source(name: &str) -> Option<&'static str> {
+    SOURCES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
+}
+
+/// The composed module for `name` (e.g. `"flat.wgsl"`).
+pub fn compose(name: &str) -> Result<String, ComposeError> {
+    let mut out = String::new();
+    let mut seen = Vec::new();
+    compose_into(name, &mut out, &mut seen)?;
+    Ok(out)
+}
+
+fn compose_into(name: &str, out: &mut String, seen: &mut Vec<String>) -> Result<(), ComposeError> {
+    if seen.iter().any(|s| s == name) {
+        return Ok(());
+    }
+    seen.push(name.to_string());
+    let src = source(name).ok_or_else(|| ComposeError { file: name.into(), detail: "no such shader".into() })?;
+    for line in src.lines() {
+        if let Some(inc) = line.trim().strip_prefix("//!include ") {
+            compose_into(inc.trim(), out, seen)
+                .map_err(|e| ComposeError { file: name.into(), detail: format!("including {}: {}", inc.trim(), e) })?;
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,210 @@
+//! The trace pass: rays in → closest hits and per-ray stats out, through the kernel of the
+//! structure's kind (`shaders/<kind>.wgsl`). Same binary formats as the CPU; large ray sets are
+//! processed in chunks that fit the device limits.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use gridrt_grid::{GridKind, Traversal};
+use gridrt_scene::{Hit, Ray};
+use wgpu::util::DeviceExt;
+
+use crate::context::{GpuContext, GpuError};
+use crate::layout::{GpuHit, GpuRay, GpuRayStats, GridParams};
+use crate::shaders::compose;
+use crate::upload::{GpuScene, GpuStructure};
+
+/// Threads per workgroup of every kernel (`@workgroup_size(64)`).
+pub const WORKGROUP: u32 = 64;
+
+/// Shader file and entry point of a kind's trace kernel.
+pub fn kernel(kind: GridKind) -> (&'static str, &'static str) {
+    match kind {
+        GridKind::Flat => ("flat.wgsl", "trace_flat"),
+        GridKind::Macrocell => ("macrocell.wgsl", "trace_macrocell"),
+        GridKind::Multires => ("multires.wgsl", "trace_multires"),
+        GridKind::TwoLevel => ("twolevel.wgsl", "trace_twolevel"),
+        GridKind::Proximity => ("proximity.wgsl", "trace_proximity"),
+    }
+}
+
+/// Traversal code the kernels understand (Bresenham is CPU-only).
+pub fn traversal_code(t: Traversal) -> Result<u32, GpuError> {
+    match t {
+        Traversal::AmanatidesWoo => Ok(0),
+        Traversal::ClearyWyvill => Ok(1),
+        Traversal::Liu => Ok(2),
+        Traversal::Bresenham => {
+            Err(GpuError::Unsupported("naive Bresenham has no GPU kernel (it is incomplete by design)".into()))
+        }
+    }
+}
+
+/// Creates a compute pipeline for `entry` in the composed shader `file` (auto layout).
+pub(crate) fn pipeline(ctx: &GpuContext, file: &str, entry: &str) -> Result<wgpu::ComputePipeline, GpuError> {
+    let src = compose(file)?;
+    let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(file),
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    });
+    Ok(ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    }))
+}
+
+/// Trace pipelines, created on first use per kind.
+#[derive(Debug, Default)]
+pub struct Tracer {
+    pipelines: Mutex<HashMap<GridKind, wgpu::ComputePipeline>>,
+}
+
+/// Buffers one trace dispatch reads and writes.
+#[derive(Debug)]
+pub struct TraceBuffers<'a> {
+    pub params: &'a wgpu::Buffer,
+    pub rays: &'a wgpu::Buffer,
+    pub hits: &'a wgpu::Buffer,
+    pub stats: &'a wgpu::Buffer,
+}
+
+impl Tracer {
+    pub fn new() -> Tracer {
+        Tracer::default()
+    }
+
+    fn pipeline(&self, ctx: &GpuContext, kind: GridKind) -> Result<wgpu::ComputePipeline, GpuError> {
+        let mut map = self.pipelines.lock().expect("tracer lock");
+        if let Some(p) = map.get(&kind) {
+            return Ok(p.clone());
+        }
+        let (file, entry) = kernel(kind);
+        let p = pipeline(ctx, file, entry)?;
+        map.insert(kind, p.clone());
+        Ok(p)
+    }
+
+    /// Records one trace dispatch of `count` rays into `encoder`.
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        s: &GpuStructure,
+        b: &TraceBuffers,
+        count: u32,
+    ) -> Result<(), GpuError> {
+        let pipe = self.pipeline(ctx, s.kind)?;
+        let mut entries = vec![
+            wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: b.rays.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: b.hits.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: b.stats.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 4, resource: scene.triangles.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 5, resource: s.refs.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 6, resource: s.cells.as_entire_binding() },
+        ];
+        if let Some(e) = &s.extra {
+            entries.push(wgpu::BindGroupEntry { binding: 7, resource: e.as_entire_binding() });
+        }
+        let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("trace bind group"),
+            layout: &pipe.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("trace pass"), timestamp_writes: None });
+        pass.set_pipeline(&pipe);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(count.div_ceil(WORKGROUP), 1, 1);
+        Ok(())
+    }
+
+    /// Traces `rays` and reads back hits and stats (chunked).
+    pub fn trace(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        s: &GpuStructure,
+        rays: &[Ray],
+        traversal: Traversal,
+        mailbox: bool,
+    ) -> Result<(Vec<Hit>, Vec<GpuRayStats>), GpuError> {
+        let limits = ctx.device.limits();
+        let max_by_binding = limits.max_storage_buffer_binding_size as u64 / std::mem::size_of::<GpuRay>() as u64;
+        let max_by_dispatch = limits.max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64;
+        let chunk = (1u64 << 20).min(max_by_binding).min(max_by_dispatch).max(1) as usize;
+        let code = traversal_code(traversal)?;
+        let n = chunk.min(rays.len().max(1));
+        let buf = |label, size: u64, usage| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let rays_buf = buf("rays", (n * 32) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
+        let hits_buf = buf("hits", (n * 16) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+        let stats_buf = buf("ray stats", (n * 8) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+        let hits_read =
+            buf("hits readback", (n * 16) as u64, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+        let stats_read =
+            buf("stats readback", (n * 8) as u64, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+        let params_buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("trace params"),
+            contents: bytemuck::bytes_of(&GridParams::default()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let mut hits = Vec::with_capacity(rays.len());
+        let mut stats = Vec::with_capacity(rays.len());
+        for (ci, part) in rays.chunks(chunk).enumerate() {
+            let count = part.len() as u32;
+            let mut p = s.params;
+            p.res[3] = count;
+            p.options = [code, mailbox as u32, s.params.options[2], (ci * chunk) as u32];
+            ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
+            ctx.queue.write_buffer(&rays_buf, 0, bytemuck::cast_slice(part));
+            let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
+            let b = TraceBuffers { params: &params_buf, rays: &rays_buf, hits: &hits_buf, stats: &stats_buf };
+            self.encode(ctx, &mut enc, scene, s, &b, count)?;
+            enc.copy_buffer_to_buffer(&hits_buf, 0, &hits_read, 0, count as u64 * 16);
+            enc.copy_buffer_to_buffer(&stats_buf, 0, &stats_read, 0, count as u64 * 8);
+            ctx.queue.submit([enc.finish()]);
+            let h: Vec<GpuHit> = read_back(ctx, &hits_read, count as u64 * 16, "hits")?;
+            let st: Vec<GpuRayStats> = read_back(ctx, &stats_read, count as u64 * 8, "ray stats")?;
+            hits.extend(h.iter().map(|h| Hit { t: h.t, triangle: h.triangle, u: h.u, v: h.v }));
+            stats.extend(st);
+        }
+        Ok((hits, stats))
+    }
+}
+
+/// Maps `buffer` (MAP_READ) and copies `size` bytes out as `T`s.
+pub fn read_back<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    size: u64,
+    what: &'static str,
+) -> Result<Vec<T>, GpuError> {
+    let slice = buffer.slice(..size);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Readback { what, detail: e.to_string() })?;
+    rx.recv()
+        .map_err(|e| GpuError::Readback { what, detail: e.to_string() })?
+        .map_err(|e| GpuError::Readback { what, detail: e.to_string() })?;
+    let view = slice.get_mapped_range().map_err(|e| GpuError::Readback { what, detail: e.to_string() })?;
+    let out = bytemuck::cast_slice(&view).to_vec();
+    drop(view);
+    buffer.unmap();
+    Ok(out)
+}

@@ -1,0 +1,97 @@
+//! The GPU layout stage: a scene's triangles and a built structure become storage buffers in
+//! exactly the layouts the WGSL kernels read (see each structure's module doc in
+//! `gridrt-grid`). Every buffer is checked against the device limits first.
+
+use glam::Vec3;
+use gridrt_grid::{AnyGrid, GridKind};
+use wgpu::util::DeviceExt;
+
+use crate::context::{GpuContext, GpuError};
+use crate::layout::{GpuNode, GridParams};
+
+/// Triangles as three vec4 each (w unused).
+#[derive(Debug)]
+pub struct GpuScene {
+    pub triangles: wgpu::Buffer,
+    pub triangle_count: u32,
+}
+
+/// A storage buffer holding `data` (at least 4 bytes: empty bindings are not allowed).
+pub(crate) fn storage(
+    ctx: &GpuContext,
+    label: &'static str,
+    data: &[u8],
+    extra: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer, GpuError> {
+    ctx.check_buffer(label, data.len() as u64, true)?;
+    let contents: &[u8] = if data.is_empty() { &[0u8; 4] } else { data };
+    Ok(ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage: wgpu::BufferUsages::STORAGE | extra,
+    }))
+}
+
+impl GpuScene {
+    pub fn new(ctx: &GpuContext, tris: &[[Vec3; 3]]) -> Result<GpuScene, GpuError> {
+        let data: Vec<[f32; 4]> = tris.iter().flat_map(|t| t.map(|v| v.extend(0.0).to_array())).collect();
+        let triangles = storage(ctx, "triangles", bytemuck::cast_slice(&data), wgpu::BufferUsages::empty())?;
+        Ok(GpuScene { triangles, triangle_count: tris.len() as u32 })
+    }
+}
+
+/// A structure's buffers: references, cell data, and the kind's extra array.
+#[derive(Debug)]
+pub struct GpuStructure {
+    pub kind: GridKind,
+    /// Grid box, cell size and resolution; ray count and options are filled per dispatch.
+    pub params: GridParams,
+    pub refs: wgpu::Buffer,
+    /// `cell_start` (flat, macrocell, proximity) or the hierarchy's `cells`.
+    pub cells: wgpu::Buffer,
+    /// Occupancy bits (macrocell), nodes (hierarchies), packed distances (proximity).
+    pub extra: Option<wgpu::Buffer>,
+    pub bytes: u64,
+}
+
+impl GpuStructure {
+    pub fn new(ctx: &GpuContext, grid: &AnyGrid) -> Result<GpuStructure, GpuError> {
+        let g = grid.geometry();
+        let mut params = GridParams {
+            grid_min: g.min.extend(0.0).to_array(),
+            inv_cell: g.inv_cell.extend(0.0).to_array(),
+            res: [g.res.x, g.res.y, g.res.z, 0],
+            options: [0; 4],
+        };
+        let none = wgpu::BufferUsages::empty();
+        let (refs, cells, extra): (&[u32], &[u8], Option<Vec<u8>>) = match grid {
+            AnyGrid::Flat(f) => (&f.refs, bytemuck::cast_slice(&f.cell_start), None),
+            AnyGrid::Macrocell(m) => {
+                params.options[2] = m.a;
+                (
+                    &m.fine.refs,
+                    bytemuck::cast_slice(&m.fine.cell_start),
+                    Some(bytemuck::cast_slice(&m.occupancy).to_vec()),
+                )
+            }
+            AnyGrid::Proximity(p) => {
+                let mut packed = p.distance.clone();
+                packed.resize(packed.len().div_ceil(4) * 4, 0);
+                (&p.grid.refs, bytemuck::cast_slice(&p.grid.cell_start), Some(packed))
+            }
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => {
+                let nodes: Vec<GpuNode> =
+                    h.nodes.iter().map(|n| GpuNode { res_first: [n.res.x, n.res.y, n.res.z, n.first_cell] }).collect();
+                (&h.refs, bytemuck::cast_slice(&h.cells), Some(bytemuck::cast_slice(&nodes).to_vec()))
+            }
+        };
+        let refs_buf = storage(ctx, "refs", bytemuck::cast_slice(refs), none)?;
+        let cells_buf = storage(ctx, "cells", cells, none)?;
+        let extra_buf = match &extra {
+            Some(e) => Some(storage(ctx, "structure extra (occupancy/nodes/distance)", e, none)?),
+            None => None,
+        };
+        let bytes = refs.len() as u64 * 4 + cells.len() as u64 + extra.as_ref().map_or(0, |e| e.len() as u64);
+        Ok(GpuStructure { kind: grid.kind(), params, refs: refs_buf, cells: cells_buf, extra: extra_buf, bytes })
+    }
+}

@@ -1,0 +1,2 @@
+//! The GPU crate's tests, in one binary (see suite/).
+mod suite;

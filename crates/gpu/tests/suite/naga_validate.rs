@@ -1,0 +1,49 @@
+//! Every .wgsl under shaders/ composes, parses and validates with naga (all validation flags).
+
+use gridrt_gpu::shaders::{SOURCES, compose};
+
+#[test]
+fn every_wgsl_file_composes_parses_and_validates() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders");
+    let mut on_disk = Vec::new();
+    let mut stack = vec![dir.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "wgsl") {
+                on_disk.push(p.strip_prefix(&dir).unwrap().to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    on_disk.sort();
+    assert!(!on_disk.is_empty(), "no shaders found under {}", dir.display());
+    let mut embedded: Vec<String> = SOURCES.iter().map(|(n, _)| n.to_string()).collect();
+    embedded.sort();
+    assert_eq!(on_disk, embedded, "shaders/ and the embedded list in crates/gpu/src/shaders.rs differ");
+    let mut failures = Vec::new();
+    for name in &on_disk {
+        let src = match compose(name) {
+            Ok(s) => s,
+            Err(e) => {
+                failures.push(format!("{name}: {e}"));
+                continue;
+            }
+        };
+        let module = match naga::front::wgsl::parse_str(&src) {
+            Ok(m) => m,
+            Err(e) => {
+                failures.push(format!("{name}: parse error:\n{}", e.emit_to_string_with_path(&src, name)));
+                continue;
+            }
+        };
+        let mut v =
+            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
+        if let Err(e) = v.validate(&module) {
+            failures.push(format!("{name}: validation error:\n{}", e.emit_to_string_with_path(&src, name)));
+        }
+    }
+    assert!(failures.is_empty(), "{} of {} shaders failed:\n{}", failures.len(), on_disk.len(), failures.join("\n\n"));
+    println!("{} shaders validated", on_disk.len());
+}

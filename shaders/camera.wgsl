@@ -1,0 +1,17 @@
+// Primary rays of a pinhole camera, one per pixel, row-major from the top-left.
+// CPU port: crates/gpu/src/cpu.rs (`camera_ray`).
+//!include shared/render_bindings.wgsl
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<storage, read_write> out_rays: array<Ray>;
+
+@compute @workgroup_size(64)
+fn camera_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = u32(camera.right.w);
+    let h = u32(camera.up.w);
+    let i = gid.x;
+    if i >= w * h {
+        return;
+    }
+    out_rays[i] = camera_ray(camera, i % w, i / w);
+}

@@ -1,0 +1,27 @@
+// Shadow rays from each primary hit towards the point light (t in [eps, 1)); a miss marks a
+// lit point. Pixels without a hit get an empty ray (tmin > tmax), which the trace kernels skip.
+// CPU port: crates/gpu/src/cpu.rs (`shadow_ray`).
+//!include shared/render_bindings.wgsl
+
+@group(0) @binding(0) var<uniform> shade: ShadeParams;
+@group(0) @binding(1) var<storage, read> primary: array<Ray>;
+@group(0) @binding(2) var<storage, read> primary_hits: array<Hit>;
+@group(0) @binding(3) var<storage, read_write> shadow_rays: array<Ray>;
+
+@compute @workgroup_size(64)
+fn shadow_rays_from_hits(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= shade.view.z * shade.view.w {
+        return;
+    }
+    let h = primary_hits[i];
+    if h.triangle == NO_HIT {
+        shadow_rays[i] = Ray(vec4<f32>(0.0, 0.0, 0.0, 1.0), vec4<f32>(1.0, 0.0, 0.0, 0.0));
+        return;
+    }
+    let p = hit_point(primary[i], h.t);
+    // Offset along the ray to the light, relative to the scene size, to leave the surface.
+    let to_light = shade.light.xyz - p;
+    let eps = 1e-4 * shade.light.w / max(length(to_light), 1e-20);
+    shadow_rays[i] = Ray(vec4<f32>(p, eps), vec4<f32>(to_light, 1.0));
+}

@@ -1,0 +1,100 @@
+//!include shared/bindings.wgsl
+//!include shared/ray.wgsl
+// Watertight ray/triangle test (Woop, Benthin, Wald 2013) with exact-sign edge functions.
+// CPU port: crates/grid/src/triangle.rs (`intersect`), which computes the edge functions in
+// f64; WGSL has no f64, so Kahan's FMA difference of products gives the same (exact) signs.
+
+struct TriHit {
+    hit: bool,
+    t: f32,
+    u: f32,
+    v: f32,
+}
+
+// a*b - c*d with a relative error of ~1.5 ulp: the sign is exact.
+fn diff_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    let w = c * d;
+    let e = fma(-c, d, w);
+    let f = fma(a, b, -w);
+    return f + e;
+}
+
+fn triangle_vertex(tri: u32, k: u32) -> vec3<f32> {
+    return triangles[3u * tri + k].xyz;
+}
+
+fn intersect_triangle(r: PreparedRay, tri: u32) -> TriHit {
+    var out: TriHit;
+    out.hit = false;
+    let a = triangle_vertex(tri, 0u) - r.org;
+    let b = triangle_vertex(tri, 1u) - r.org;
+    let c = triangle_vertex(tri, 2u) - r.org;
+    let ax = a[r.kx] - r.sx * a[r.kz];
+    let ay = a[r.ky] - r.sy * a[r.kz];
+    let bx = b[r.kx] - r.sx * b[r.kz];
+    let by = b[r.ky] - r.sy * b[r.kz];
+    let cx = c[r.kx] - r.sx * c[r.kz];
+    let cy = c[r.ky] - r.sy * c[r.kz];
+    let u = diff_of_products(cx, by, cy, bx);
+    let v = diff_of_products(ax, cy, ay, cx);
+    let w = diff_of_products(bx, ay, by, ax);
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return out;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return out;
+    }
+    let az = r.sz * a[r.kz];
+    let bz = r.sz * b[r.kz];
+    let cz = r.sz * c[r.kz];
+    let t = (u * az + v * bz + w * cz) / det;
+    if !(t >= r.tmin && t <= r.tmax && t < inf()) {
+        return out;
+    }
+    out.hit = true;
+    out.t = t;
+    out.u = v / det;
+    out.v = w / det;
+    return out;
+}
+
+// Deterministic order: smaller t, then smaller triangle index.
+fn closer(t: f32, tri: u32, best: Hit) -> bool {
+    return t < best.t || (t == best.t && tri < best.triangle);
+}
+
+// Hashed per-ray mailbox (crates/grid/src/mailbox.rs): 16 direct-mapped entries.
+const MAILBOX_SIZE: u32 = 16u;
+
+// Tests one referenced triangle against the ray, updating best/stats/mailbox.
+fn test_triangle(r: PreparedRay, tri: u32, best: ptr<function, Hit>, stats: ptr<function, RayStats>,
+                 mailbox: ptr<function, array<u32, 16>>, use_mailbox: bool) {
+    if use_mailbox {
+        let slot = tri & (MAILBOX_SIZE - 1u);
+        if (*mailbox)[slot] == tri {
+            return;
+        }
+        (*mailbox)[slot] = tri;
+    }
+    (*stats).tests += 1u;
+    let h = intersect_triangle(r, tri);
+    if h.hit && closer(h.t, tri, *best) {
+        (*best).t = h.t;
+        (*best).triangle = tri;
+        (*best).u = h.u;
+        (*best).v = h.v;
+    }
+}
+
+fn miss() -> Hit {
+    return Hit(inf(), NO_HIT, 0.0, 0.0);
+}
+
+fn empty_mailbox() -> array<u32, 16> {
+    var m: array<u32, 16>;
+    for (var i = 0u; i < MAILBOX_SIZE; i++) {
+        m[i] = NO_HIT;
+    }
+    return m;
+}

@@ -1,0 +1,37 @@
+// Data layouts shared by every kernel.
+// Keep in sync with crates/gpu/src/layout.rs (each struct is mirrored there; a test checks the
+// sizes and member offsets with naga).
+
+// One ray: origin.xyz + tmin, dir.xyz + tmax (the ray file's record). Mirrors `GpuRay`.
+struct Ray {
+    origin_tmin: vec4<f32>,
+    dir_tmax: vec4<f32>,
+}
+
+// Closest hit: t, triangle (0xFFFFFFFF = miss), barycentrics u, v. Mirrors `GpuHit`.
+struct Hit {
+    t: f32,
+    triangle: u32,
+    u: f32,
+    v: f32,
+}
+
+// Per-ray counters. Mirrors `GpuRayStats`.
+struct RayStats {
+    cells: u32,
+    tests: u32,
+}
+
+// Per-dispatch parameters. Mirrors `GridParams`.
+struct Params {
+    // xyz: grid box minimum (world units).
+    grid_min: vec4<f32>,
+    // xyz: 1 / cell size.
+    inv_cell: vec4<f32>,
+    // xyz: resolution of the flat / fine / top grid; w: number of rays in this dispatch.
+    res: vec4<u32>,
+    // x: traversal (0 Amanatides-Woo, 1 Cleary-Wyvill, 2 Liu); y: mailbox (0/1);
+    // z: macrocell edge A (macrocell kernel); w: first ray of this dispatch.
+    options: vec4<u32>,
+}
+
