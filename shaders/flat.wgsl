@@ -18,7 +18,7 @@ fn trace_flat(@builtin(global_invocation_id) gid: vec3<u32>) {
         let g = grid_ray(pr);
         if !ray_is_empty(g) {
             let res = params.res.xyz;
-            var w = walker_init(params.options.x, g, res);
+            var w = walker_init(TRAVERSAL, g, res);
             var mailbox = empty_mailbox();
             let use_mailbox = params.options.y != 0u;
             loop {

@@ -26,7 +26,7 @@ fn trace_macrocell(@builtin(global_invocation_id) gid: vec3<u32>) {
             mg.o = fine.o / af;
             mg.d = fine.d / af;
             mg.inv_d = fine.inv_d * af;
-            var mw = walker_init(params.options.x, mg, macro_res);
+            var mw = walker_init(TRAVERSAL, mg, macro_res);
             var mailbox = empty_mailbox();
             let use_mailbox = params.options.y != 0u;
             var t_enter = fine.t0;
@@ -45,7 +45,7 @@ fn trace_macrocell(@builtin(global_invocation_id) gid: vec3<u32>) {
                     sub.o = fine.o - vec3<f32>(lo);
                     sub.t0 = t_enter;
                     sub.t1 = t_exit;
-                    var fw = walker_init(params.options.x, sub, vec3<u32>(a));
+                    var fw = walker_init(TRAVERSAL, sub, vec3<u32>(a));
                     loop {
                         if !walker_next(&fw) {
                             break;

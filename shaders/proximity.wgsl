@@ -32,7 +32,7 @@ fn trace_proximity(@builtin(global_invocation_id) gid: vec3<u32>) {
         if !ray_is_empty(g) {
             let res = params.res.xyz;
             let resi = vec3<i32>(res);
-            var w = walker_init(params.options.x, g, res);
+            var w = walker_init(TRAVERSAL, g, res);
             var mailbox = empty_mailbox();
             let use_mailbox = params.options.y != 0u;
             loop {
@@ -49,7 +49,7 @@ fn trace_proximity(@builtin(global_invocation_id) gid: vec3<u32>) {
                     let t = min(exit_of_box(g, lo, hi), g.t1);
                     if t > g.t0 && t < g.t1 {
                         g.t0 = t;
-                        w = walker_init(params.options.x, g, res);
+                        w = walker_init(TRAVERSAL, g, res);
                         continue;
                     }
                     if t >= g.t1 {

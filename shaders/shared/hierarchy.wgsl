@@ -29,7 +29,7 @@ fn trace_hierarchy(i: u32) {
             var frame_t_enter: array<f32, 8>;
             var mailbox = empty_mailbox();
             let use_mailbox = params.options.y != 0u;
-            let kind = params.options.x;
+            let kind = TRAVERSAL;
             var w = walker_init(kind, top, nodes[0].res_first.xyz);
             var node_idx = 0u;
             var t_enter = top.t0;

@@ -29,6 +29,10 @@ pub enum Command {
     Rays(RaysArgs),
     /// Trace a ray file and write the closest hits (16 bytes per ray: f32 t, u32 triangle, f32 u, f32 v).
     Trace(TraceArgs),
+    /// Render an image on the GPU (camera rays, closest hit, shading) and write a PNG.
+    Render(RenderArgs),
+    /// Measure Mrays/s of the CPU (all threads) and the GPU on primary and random rays.
+    BenchTrace(BenchTraceArgs),
 }
 
 /// A scene: a .glb/.gltf path, or `@default` for the embedded default scene.
@@ -220,6 +224,8 @@ pub enum Backend {
     Cpu,
     /// Brute force over every triangle (the reference).
     Brute,
+    /// The structure's WGSL trace kernel through wgpu (WGPU_ADAPTER_NAME picks the adapter).
+    Gpu,
 }
 
 #[derive(Debug, Args)]
@@ -249,4 +255,67 @@ pub struct TraceArgs {
 
 fn parse_traversal(s: &str) -> Result<Traversal, String> {
     s.parse()
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Traversal: aw, cw or liu.
+    #[arg(long, default_value = "aw", value_parser = parse_traversal)]
+    pub traversal: Traversal,
+    /// Disable the per-ray mailbox.
+    #[arg(long)]
+    pub no_mailbox: bool,
+    /// View: shaded, normals, depth, heatmap-cells, heatmap-tests.
+    #[arg(long, default_value = "shaded", value_parser = parse_view)]
+    pub view: gridrt_gpu::View,
+    /// Image size WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Camera: auto (frames the scene bounds) or eye_x,eye_y,eye_z,target_x,target_y,target_z,fov.
+    #[arg(long, default_value = "auto", allow_hyphen_values = true)]
+    pub camera: String,
+    /// Count at the top of the heatmap colour scale.
+    #[arg(long, default_value_t = 64.0)]
+    pub heat_max: f32,
+    /// Output PNG.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+fn parse_view(s: &str) -> Result<gridrt_gpu::View, String> {
+    s.parse()
+}
+
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WIDTHxHEIGHT, got \"{s}\""))?;
+    let w: u32 = w.parse().map_err(|_| format!("bad width in \"{s}\""))?;
+    let h: u32 = h.parse().map_err(|_| format!("bad height in \"{s}\""))?;
+    if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
+        return Err("width and height must be in 1..=16384".into());
+    }
+    Ok((w, h))
+}
+
+#[derive(Debug, Args)]
+pub struct BenchTraceArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Rays per set (primary and random).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub rays: usize,
+    /// Traversal: aw, cw or liu.
+    #[arg(long, default_value = "aw", value_parser = parse_traversal)]
+    pub traversal: Traversal,
+    /// Repetitions (the best is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeat: u32,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -20,5 +20,7 @@ fn main() -> anyhow::Result<()> {
         Some(cli::Command::Gen(a)) => commands::generate::run(a),
         Some(cli::Command::Rays(a)) => commands::rays::run(a),
         Some(cli::Command::Trace(a)) => commands::trace::run(a),
+        Some(cli::Command::Render(a)) => commands::render::run(a),
+        Some(cli::Command::BenchTrace(a)) => commands::bench_trace::run(a),
     }
 }

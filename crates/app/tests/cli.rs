@@ -137,3 +137,60 @@ fn demo_runs_and_checks_itself() {
     let out = ok(&[]);
     assert!(out.contains("brute-force check: 2000 of 2000"), "{out}");
 }
+
+#[test]
+fn gpu_trace_and_render() {
+    if std::env::var("GRIDRT_SKIP_GPU_TESTS").is_ok_and(|v| v == "1") {
+        eprintln!("GRIDRT_SKIP_GPU_TESTS=1: skipping");
+        return;
+    }
+    let scene = tmp("gpu-scene.glb");
+    ok(&["gen", "sphereflake", "--size", "1", "-o", s(&scene)]);
+    let rays = tmp("gpu-rays.bin");
+    ok(&["rays", s(&scene), "--kind", "random", "--count", "20000", "-o", s(&rays)]);
+    let cpu = tmp("cpu.hits");
+    ok(&["trace", s(&scene), "--rays", s(&rays), "-o", s(&cpu)]);
+    for grid in ["flat", "macrocell", "multires", "twolevel", "proximity"] {
+        let gpu = tmp(&format!("gpu-{grid}.hits"));
+        let out = ok(&[
+            "trace",
+            s(&scene),
+            "--rays",
+            s(&rays),
+            "-o",
+            s(&gpu),
+            "--backend",
+            "gpu",
+            "--grid",
+            grid,
+            "--traversal",
+            "liu",
+        ]);
+        assert!(out.contains("on the GPU"), "{out}");
+        let (a, b) = (std::fs::read(&cpu).unwrap(), std::fs::read(&gpu).unwrap());
+        assert_eq!(a.len(), b.len());
+        let same = a.chunks(16).zip(b.chunks(16)).filter(|(x, y)| x[4..8] == y[4..8]).count();
+        assert!(same >= a.len() / 16 - 2, "{grid}: only {same} of {} rays hit the same triangle", a.len() / 16);
+    }
+    let png = tmp("render.png");
+    let out = ok(&[
+        "render",
+        s(&scene),
+        "--size",
+        "160x120",
+        "--view",
+        "heatmap-cells",
+        "--grid",
+        "macrocell",
+        "-o",
+        s(&png),
+    ]);
+    assert!(out.contains("colour scale"), "{out}");
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    ok(&["render", s(&scene), "--size", "64x48", "--camera", "0,0.5,6,0,0,0,40", "-o", s(&png)]);
+    fails(&["render", s(&scene), "--view", "xray", "-o", s(&png)], "unknown view");
+    fails(&["render", s(&scene), "--size", "0x10", "-o", s(&png)], "width and height");
+    let bench = ok(&["bench-trace", s(&scene), "--rays", "2000", "--repeat", "1"]);
+    assert!(bench.contains("GPU Mrays/s") && bench.contains("primary") && bench.contains("random"), "{bench}");
+}

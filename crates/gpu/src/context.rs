@@ -111,11 +111,11 @@ impl GpuContext {
         if size > l.max_buffer_size {
             return Err(GpuError::BufferTooLarge { buffer, size, limit: l.max_buffer_size, which: "max_buffer_size" });
         }
-        if storage_binding && size > l.max_storage_buffer_binding_size as u64 {
+        if storage_binding && size > l.max_storage_buffer_binding_size {
             return Err(GpuError::BufferTooLarge {
                 buffer,
                 size,
-                limit: l.max_storage_buffer_binding_size as u64,
+                limit: l.max_storage_buffer_binding_size,
                 which: "max_storage_buffer_binding_size",
             });
         }

@@ -42,6 +42,16 @@ pub fn traversal_code(t: Traversal) -> Result<u32, GpuError> {
 
 /// Creates a compute pipeline for `entry` in the composed shader `file` (auto layout).
 pub(crate) fn pipeline(ctx: &GpuContext, file: &str, entry: &str) -> Result<wgpu::ComputePipeline, GpuError> {
+    pipeline_with(ctx, file, entry, &[])
+}
+
+/// [`pipeline`] with values for the shader's `override` constants.
+pub(crate) fn pipeline_with(
+    ctx: &GpuContext,
+    file: &str,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> Result<wgpu::ComputePipeline, GpuError> {
     let src = compose(file)?;
     let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(file),
@@ -52,7 +62,7 @@ pub(crate) fn pipeline(ctx: &GpuContext, file: &str, entry: &str) -> Result<wgpu
         layout: None,
         module: &module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
         cache: None,
     }))
 }
@@ -60,7 +70,7 @@ pub(crate) fn pipeline(ctx: &GpuContext, file: &str, entry: &str) -> Result<wgpu
 /// Trace pipelines, created on first use per kind.
 #[derive(Debug, Default)]
 pub struct Tracer {
-    pipelines: Mutex<HashMap<GridKind, wgpu::ComputePipeline>>,
+    pipelines: Mutex<HashMap<(GridKind, u32), wgpu::ComputePipeline>>,
 }
 
 /// Buffers one trace dispatch reads and writes.
@@ -70,6 +80,10 @@ pub struct TraceBuffers<'a> {
     pub rays: &'a wgpu::Buffer,
     pub hits: &'a wgpu::Buffer,
     pub stats: &'a wgpu::Buffer,
+    /// Rays in the dispatch.
+    pub count: u32,
+    /// Traversal code ([`traversal_code`]); `params` carries the same in `options.x`.
+    pub traversal: u32,
 }
 
 impl Tracer {
@@ -77,18 +91,19 @@ impl Tracer {
         Tracer::default()
     }
 
-    fn pipeline(&self, ctx: &GpuContext, kind: GridKind) -> Result<wgpu::ComputePipeline, GpuError> {
+    /// The pipeline for `kind` walking with traversal `code` (an override constant).
+    fn pipeline(&self, ctx: &GpuContext, kind: GridKind, code: u32) -> Result<wgpu::ComputePipeline, GpuError> {
         let mut map = self.pipelines.lock().expect("tracer lock");
-        if let Some(p) = map.get(&kind) {
+        if let Some(p) = map.get(&(kind, code)) {
             return Ok(p.clone());
         }
         let (file, entry) = kernel(kind);
-        let p = pipeline(ctx, file, entry)?;
-        map.insert(kind, p.clone());
+        let p = pipeline_with(ctx, file, entry, &[("TRAVERSAL", code as f64)])?;
+        map.insert((kind, code), p.clone());
         Ok(p)
     }
 
-    /// Records one trace dispatch of `count` rays into `encoder`.
+    /// Records one trace dispatch into `encoder`.
     pub fn encode(
         &self,
         ctx: &GpuContext,
@@ -96,9 +111,8 @@ impl Tracer {
         scene: &GpuScene,
         s: &GpuStructure,
         b: &TraceBuffers,
-        count: u32,
     ) -> Result<(), GpuError> {
-        let pipe = self.pipeline(ctx, s.kind)?;
+        let pipe = self.pipeline(ctx, s.kind, b.traversal)?;
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: b.rays.as_entire_binding() },
@@ -120,7 +134,7 @@ impl Tracer {
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("trace pass"), timestamp_writes: None });
         pass.set_pipeline(&pipe);
         pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(count.div_ceil(WORKGROUP), 1, 1);
+        pass.dispatch_workgroups(b.count.div_ceil(WORKGROUP), 1, 1);
         Ok(())
     }
 
@@ -135,7 +149,7 @@ impl Tracer {
         mailbox: bool,
     ) -> Result<(Vec<Hit>, Vec<GpuRayStats>), GpuError> {
         let limits = ctx.device.limits();
-        let max_by_binding = limits.max_storage_buffer_binding_size as u64 / std::mem::size_of::<GpuRay>() as u64;
+        let max_by_binding = limits.max_storage_buffer_binding_size / std::mem::size_of::<GpuRay>() as u64;
         let max_by_dispatch = limits.max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64;
         let chunk = (1u64 << 20).min(max_by_binding).min(max_by_dispatch).max(1) as usize;
         let code = traversal_code(traversal)?;
@@ -170,8 +184,15 @@ impl Tracer {
             ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
             ctx.queue.write_buffer(&rays_buf, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
-            let b = TraceBuffers { params: &params_buf, rays: &rays_buf, hits: &hits_buf, stats: &stats_buf };
-            self.encode(ctx, &mut enc, scene, s, &b, count)?;
+            let b = TraceBuffers {
+                params: &params_buf,
+                rays: &rays_buf,
+                hits: &hits_buf,
+                stats: &stats_buf,
+                count,
+                traversal: code,
+            };
+            self.encode(ctx, &mut enc, scene, s, &b)?;
             enc.copy_buffer_to_buffer(&hits_buf, 0, &hits_read, 0, count as u64 * 16);
             enc.copy_buffer_to_buffer(&stats_buf, 0, &stats_read, 0, count as u64 * 8);
             ctx.queue.submit([enc.finish()]);

@@ -1,10 +1,12 @@
 //! One module per subcommand, plus the helpers they share.
 
+pub mod bench_trace;
 pub mod build;
 pub mod demo;
 pub mod generate;
 pub mod info;
 pub mod rays;
+pub mod render;
 pub mod trace;
 
 use std::path::Path;
@@ -40,4 +42,11 @@ pub fn human_bytes(b: u64) -> String {
     } else {
         format!("{b} B")
     }
+}
+
+/// The GPU device, with its adapter reported on stderr.
+pub fn gpu_context() -> anyhow::Result<gridrt_gpu::GpuContext> {
+    let ctx = gridrt_gpu::GpuContext::new_headless_blocking()?;
+    eprintln!("GPU adapter: {}", ctx.adapter_name());
+    Ok(ctx)
 }

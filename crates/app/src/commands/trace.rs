@@ -24,6 +24,30 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             let (hits, stats) = trace_batch(&rays, true, |r| brute::trace(&tris, r));
             ("brute force".to_string(), 0.0, 0, hits, stats, start.elapsed().as_secs_f64())
         }
+        Backend::Gpu => {
+            let (grid, b) = build_grid(&tris, &args.grid)?;
+            let ctx = super::gpu_context()?;
+            let scene = gridrt_gpu::upload::GpuScene::new(&ctx, &tris)?;
+            let gs = gridrt_gpu::upload::GpuStructure::new(&ctx, &grid)?;
+            let tracer = gridrt_gpu::Tracer::new();
+            // Warm-up (pipeline creation) outside the timing.
+            tracer.trace(&ctx, &scene, &gs, &rays[..rays.len().min(64)], args.traversal, args.mailbox)?;
+            let start = Instant::now();
+            let (hits, st) = tracer.trace(&ctx, &scene, &gs, &rays, args.traversal, args.mailbox)?;
+            let secs = start.elapsed().as_secs_f64();
+            let mut stats = BatchStats::default();
+            for (h, s) in hits.iter().zip(&st) {
+                stats.add(gridrt_grid::RayStats { cells: s.cells, tests: s.tests }, h.is_hit());
+            }
+            let label = format!(
+                "{} on the GPU ({}), {}{}",
+                grid.kind(),
+                ctx.adapter_name(),
+                args.traversal,
+                if args.mailbox { " + mailbox" } else { "" }
+            );
+            (label, b.times.total(), b.stats.memory_bytes, hits, stats, secs)
+        }
         Backend::Cpu => {
             let (grid, b) = build_grid(&tris, &args.grid)?;
             let opts = TraceOptions { traversal: args.traversal, mailbox: args.mailbox };

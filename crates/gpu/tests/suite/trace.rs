@@ -51,6 +51,10 @@ struct Tally {
 }
 
 fn compare(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind]) -> Tally {
+    compare_with(name, tris, rays, kinds, &[false, true])
+}
+
+fn compare_with(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind], mailboxes: &[bool]) -> Tally {
     let ctx = gpu().expect("checked by caller");
     let scene = GpuScene::new(ctx, tris).unwrap();
     let tracer = Tracer::new();
@@ -61,7 +65,7 @@ fn compare(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind]) -> 
         let (grid, _) = structure::build(tris, &GridConfig { kind, ..GridConfig::default() }).unwrap();
         let gs = GpuStructure::new(ctx, &grid).unwrap();
         for traversal in Traversal::EXACT {
-            for mailbox in [false, true] {
+            for &mailbox in mailboxes {
                 let opts = TraceOptions { traversal, mailbox };
                 let (cpu_hits, _) = grid.trace_batch(tris, rays, opts, true);
                 let cpu_stats: Vec<_> = rays.iter().map(|r| grid.trace(tris, r, opts).1).collect();
@@ -160,5 +164,32 @@ fn gpu_matches_cpu_on_procedural_scenes() {
     }
     println!("total: {total:?}");
     // Ties and ill-conditioned hits are rounding coincidences: rare, or something is wrong.
+    assert!(total.near_ties + total.boundary_ties + total.ill_conditioned <= total.rays / 10_000, "{total:?}");
+}
+
+#[test]
+fn gpu_matches_cpu_on_shared_scenes() {
+    if gpu().is_none() {
+        return;
+    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
+    let Ok(rd) = std::fs::read_dir(&dir) else {
+        println!("../shared/scenes not present: nothing to do");
+        return;
+    };
+    let mut paths: Vec<_> =
+        rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "glb")).collect();
+    paths.sort();
+    let mut total = Tally::default();
+    for p in paths {
+        let (mesh, _) = gridrt_scene::gltf_load::load_path(&p).unwrap();
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        let t = compare_with(&name, &mesh.triangles(), &rays_for(&mesh, RAYS), &GridKind::ALL, &[true]);
+        total.rays += t.rays;
+        total.near_ties += t.near_ties;
+        total.boundary_ties += t.boundary_ties;
+        total.ill_conditioned += t.ill_conditioned;
+    }
+    println!("total: {total:?}");
     assert!(total.near_ties + total.boundary_ties + total.ill_conditioned <= total.rays / 10_000, "{total:?}");
 }
