@@ -58,7 +58,7 @@ pub struct GridArgs {
     #[arg(long, default_value = "flat", value_parser = parse_grid)]
     pub grid: GridKind,
     /// Resolution of the flat / fine / top grid: auto (cost-model guess-and-check), density=λ,
-    /// point, line, m=N, or mx,my,mz. Default: auto (multires: density=0.125; twolevel: λ₁·N cells).
+    /// point, line, m=N, or mx,my,mz. Default: auto (multires: density=0.0625; twolevel: λ₁·N cells).
     #[arg(long, value_parser = parse_resolution)]
     pub resolution: Option<Resolution>,
     /// Insert triangles by exact triangle/box overlap instead of by bounding box.

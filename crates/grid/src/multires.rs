@@ -86,7 +86,7 @@ impl Default for MultiresOptions {
         MultiresOptions {
             policy: Policy::Adaptive,
             max_depth: 3,
-            density: 1.0,
+            density: 0.5,
             cost: CostModel::default(),
             always_subdivide: false,
         }
