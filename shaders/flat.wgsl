@@ -27,9 +27,7 @@ fn trace_flat(@builtin(global_invocation_id) gid: vec3<u32>) {
                 }
                 stats.cells += 1u;
                 let idx = cell_index(w.out_cell, res);
-                for (var k = cell_start[idx]; k < cell_start[idx + 1u]; k++) {
-                    test_triangle(pr, refs[k], &best, &stats, &mailbox, use_mailbox);
-                }
+                test_refs(pr, cell_start[idx], cell_start[idx + 1u], &best, &stats, &mailbox, use_mailbox);
                 if best.t < w.out_t_exit {
                     break;
                 }

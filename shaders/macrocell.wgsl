@@ -52,9 +52,7 @@ fn trace_macrocell(@builtin(global_invocation_id) gid: vec3<u32>) {
                         }
                         stats.cells += 1u;
                         let idx = cell_index(lo + fw.out_cell, res);
-                        for (var k = cell_start[idx]; k < cell_start[idx + 1u]; k++) {
-                            test_triangle(pr, refs[k], &best, &stats, &mailbox, use_mailbox);
-                        }
+                        test_refs(pr, cell_start[idx], cell_start[idx + 1u], &best, &stats, &mailbox, use_mailbox);
                         if best.t < fw.out_t_exit {
                             done = true;
                             break;

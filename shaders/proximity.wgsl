@@ -56,9 +56,7 @@ fn trace_proximity(@builtin(global_invocation_id) gid: vec3<u32>) {
                         break;
                     }
                 }
-                for (var k2 = cell_start[idx]; k2 < cell_start[idx + 1u]; k2++) {
-                    test_triangle(pr, refs[k2], &best, &stats, &mailbox, use_mailbox);
-                }
+                test_refs(pr, cell_start[idx], cell_start[idx + 1u], &best, &stats, &mailbox, use_mailbox);
                 if best.t < w.out_t_exit {
                     break;
                 }

@@ -66,9 +66,7 @@ fn trace_hierarchy(i: u32) {
                     }
                     continue;
                 }
-                for (var k = cell.x; k < cell.x + cell.y; k++) {
-                    test_triangle(pr, refs[k], &best, &stats, &mailbox, use_mailbox);
-                }
+                test_refs(pr, cell.x, cell.x + cell.y, &best, &stats, &mailbox, use_mailbox);
                 if best.t < t_exit {
                     break;
                 }

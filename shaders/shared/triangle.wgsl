@@ -87,6 +87,14 @@ fn test_triangle(r: PreparedRay, tri: u32, best: ptr<function, Hit>, stats: ptr<
     }
 }
 
+// Tests refs[first .. end] (one cell's triangles). CPU port: crates/grid/src/trace.rs `test_refs`.
+fn test_refs(r: PreparedRay, first: u32, end: u32, best: ptr<function, Hit>, stats: ptr<function, RayStats>,
+             mailbox: ptr<function, array<u32, 16>>, use_mailbox: bool) {
+    for (var k = first; k < end; k++) {
+        test_triangle(r, refs[k], best, stats, mailbox, use_mailbox);
+    }
+}
+
 fn miss() -> Hit {
     return Hit(inf(), NO_HIT, 0.0, 0.0);
 }

@@ -37,8 +37,9 @@ use serde::Serialize;
 use crate::geometry::{GridGeometry, GridRay, INSERT_MARGIN_CELLS};
 use crate::mailbox::Mailbox;
 use crate::stats::RayStats;
+use crate::trace::test_refs;
 use crate::traversal::{Traversal, Walker};
-use crate::triangle::{PreparedRay, closer, intersect};
+use crate::triangle::PreparedRay;
 
 /// `cells[i][1] == CHILD` marks an internal cell.
 pub const CHILD: u32 = u32::MAX;
@@ -166,17 +167,14 @@ impl Hierarchy {
                 stack.push(Frame { node: a, ray: r, walker, t_enter: r.t0 });
                 continue;
             }
-            for &tri in &self.refs[a as usize..(a + b) as usize] {
-                if mailbox && mb.check_and_insert(tri) {
-                    continue;
-                }
-                stats.tests += 1;
-                if let Some(h) = intersect(&pr, &tris[tri as usize])
-                    && closer(h.t, tri, best.t, best.triangle)
-                {
-                    best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
-                }
-            }
+            test_refs(
+                &self.refs[a as usize..(a + b) as usize],
+                tris,
+                &pr,
+                &mut best,
+                &mut stats,
+                mailbox.then_some(&mut mb),
+            );
             if best.t < step.t_exit {
                 break;
             }

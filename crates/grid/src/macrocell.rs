@@ -25,8 +25,9 @@ use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
 use crate::geometry::{GridGeometry, GridRay};
 use crate::mailbox::Mailbox;
 use crate::stats::RayStats;
+use crate::trace::test_refs;
 use crate::traversal::{Traversal, Walker};
-use crate::triangle::{PreparedRay, closer, intersect};
+use crate::triangle::PreparedRay;
 use crate::{BuildError, triangle_bounds};
 
 /// Macrocell sizes the cost model chooses among.
@@ -125,17 +126,14 @@ impl MacrocellGrid {
                 for step in Walker::new(traversal, &sub, block) {
                     stats.cells += 1;
                     let c = lo + step.cell;
-                    for &tri in self.fine.cell(self.fine.geom.cell_index(c)) {
-                        if mailbox && mb.check_and_insert(tri) {
-                            continue;
-                        }
-                        stats.tests += 1;
-                        if let Some(h) = intersect(&pr, &tris[tri as usize])
-                            && closer(h.t, tri, best.t, best.triangle)
-                        {
-                            best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
-                        }
-                    }
+                    test_refs(
+                        self.fine.cell(self.fine.geom.cell_index(c)),
+                        tris,
+                        &pr,
+                        &mut best,
+                        &mut stats,
+                        mailbox.then_some(&mut mb),
+                    );
                     if best.t < step.t_exit {
                         return (best, stats);
                     }

@@ -19,8 +19,9 @@ use crate::flat::FlatGrid;
 use crate::geometry::GridRay;
 use crate::mailbox::Mailbox;
 use crate::stats::RayStats;
+use crate::trace::test_refs;
 use crate::traversal::{Traversal, Walker};
-use crate::triangle::{PreparedRay, closer, intersect};
+use crate::triangle::PreparedRay;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ProximityGrid {
@@ -66,17 +67,7 @@ impl ProximityGrid {
                     break;
                 }
             }
-            for &tri in self.grid.cell(idx) {
-                if mailbox && mb.check_and_insert(tri) {
-                    continue;
-                }
-                stats.tests += 1;
-                if let Some(h) = intersect(&pr, &tris[tri as usize])
-                    && closer(h.t, tri, best.t, best.triangle)
-                {
-                    best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
-                }
-            }
+            test_refs(self.grid.cell(idx), tris, &pr, &mut best, &mut stats, mailbox.then_some(&mut mb));
             if best.t < step.t_exit {
                 break;
             }

@@ -60,22 +60,45 @@ fn closest_hit(
     let mut mb = Mailbox::default();
     for step in walker {
         stats.cells += 1;
-        for &tri in grid.cell(grid.geom.cell_index(step.cell)) {
-            if mailbox && mb.check_and_insert(tri) {
-                continue;
-            }
-            stats.tests += 1;
-            if let Some(h) = intersect(pr, &tris[tri as usize])
-                && closer(h.t, tri, best.t, best.triangle)
-            {
-                best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
-            }
-        }
+        test_refs(
+            grid.cell(grid.geom.cell_index(step.cell)),
+            tris,
+            pr,
+            &mut best,
+            &mut stats,
+            mailbox.then_some(&mut mb),
+        );
         if best.t < step.t_exit {
             break;
         }
     }
     (best, stats)
+}
+
+/// Tests the triangles `refs` of one cell (skipping mailboxed ones), keeping the closest hit
+/// by (t, index) in `best` and counting tests: the inner loop of every structure's traversal.
+#[inline]
+pub fn test_refs(
+    refs: &[u32],
+    tris: &[[Vec3; 3]],
+    pr: &PreparedRay,
+    best: &mut Hit,
+    stats: &mut RayStats,
+    mut mailbox: Option<&mut Mailbox>,
+) {
+    for &tri in refs {
+        if let Some(mb) = mailbox.as_deref_mut()
+            && mb.check_and_insert(tri)
+        {
+            continue;
+        }
+        stats.tests += 1;
+        if let Some(h) = intersect(pr, &tris[tri as usize])
+            && closer(h.t, tri, best.t, best.triangle)
+        {
+            *best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
+        }
+    }
 }
 
 /// Traces a batch (in parallel with the `parallel` feature and `parallel = true`).
