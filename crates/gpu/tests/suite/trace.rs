@@ -61,6 +61,15 @@ struct Tally {
     ill_conditioned: usize,
 }
 
+impl Tally {
+    fn add(&mut self, o: &Tally) {
+        self.rays += o.rays;
+        self.near_ties += o.near_ties;
+        self.boundary_ties += o.boundary_ties;
+        self.ill_conditioned += o.ill_conditioned;
+    }
+}
+
 fn compare(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind]) -> Tally {
     compare_with(name, tris, rays, kinds, &[false, true])
 }
@@ -168,10 +177,7 @@ fn gpu_matches_cpu_on_procedural_scenes() {
     let mut total = Tally::default();
     for (name, mesh) in scenes {
         let t = compare(name, &mesh.triangles(), &rays_for(&mesh, RAYS), &GridKind::ALL);
-        total.rays += t.rays;
-        total.near_ties += t.near_ties;
-        total.boundary_ties += t.boundary_ties;
-        total.ill_conditioned += t.ill_conditioned;
+        total.add(&t);
     }
     println!("total: {total:?}");
     // Ties and ill-conditioned hits are rounding coincidences: rare, or something is wrong.
@@ -196,10 +202,7 @@ fn gpu_matches_cpu_on_shared_scenes() {
         let (mesh, _) = gridrt_scene::gltf_load::load_path(&p).unwrap();
         let name = p.file_name().unwrap().to_string_lossy().to_string();
         let t = compare_with(&name, &mesh.triangles(), &rays_for(&mesh, RAYS), &GridKind::ALL, &[true]);
-        total.rays += t.rays;
-        total.near_ties += t.near_ties;
-        total.boundary_ties += t.boundary_ties;
-        total.ill_conditioned += t.ill_conditioned;
+        total.add(&t);
     }
     println!("total: {total:?}");
     check_totals(&total);
