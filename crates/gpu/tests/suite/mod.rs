@@ -1,3 +1,4 @@
+//! Test modules of the GPU crate (one binary; see ../gpu.rs).
 pub mod common;
 pub mod layout;
 pub mod naga_validate;

@@ -1,3 +1,4 @@
+//! Test modules of the scene crate (one binary; see ../scene.rs).
 pub mod builder;
 pub mod gltf_valid;
 pub mod malformed;
