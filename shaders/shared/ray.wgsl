@@ -23,6 +23,18 @@ struct PreparedRay {
     valid: bool,
 }
 
+// Index of the largest component (the dominant axis); ties go to the lowest axis.
+// CPU port: crates/grid/src/traversal/mod.rs `argmax3`.
+fn argmax3(v: vec3<f32>) -> u32 {
+    if v.x >= v.y && v.x >= v.z {
+        return 0u;
+    }
+    if v.y >= v.z {
+        return 1u;
+    }
+    return 2u;
+}
+
 fn is_finite3(v: vec3<f32>) -> bool {
     let a = abs(v);
     return a.x < inf() && a.y < inf() && a.z < inf();
@@ -39,13 +51,7 @@ fn prepare_ray(r: Ray) -> PreparedRay {
     if !p.valid {
         return p;
     }
-    let a = abs(p.dir);
-    var kz = 2u;
-    if a.x >= a.y && a.x >= a.z {
-        kz = 0u;
-    } else if a.y >= a.z {
-        kz = 1u;
-    }
+    let kz = argmax3(abs(p.dir));
     var kx = (kz + 1u) % 3u;
     var ky = (kx + 1u) % 3u;
     if p.dir[kz] < 0.0 {

@@ -221,13 +221,7 @@ fn walker_init(kind: u32, g: GridRay, res_u: vec3<u32>) -> Walker {
             w.delta[a] = max(cw_to_fixed(abs(g.inv_d[a]) * w.scale), 1u);
         }
     } else {
-        let ad = abs(g.d);
-        var u = 2u;
-        if ad.x >= ad.y && ad.x >= ad.z {
-            u = 0u;
-        } else if ad.y >= ad.z {
-            u = 1u;
-        }
+        let u = argmax3(abs(g.d));
         let v = (u + 1u) % 3u;
         let ww = (u + 2u) % 3u;
         w.u = u;

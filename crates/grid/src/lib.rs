@@ -54,19 +54,24 @@ pub fn triangle_bounds(tris: &[[Vec3; 3]]) -> Aabb {
     Aabb::from_points(tris.iter().flatten())
 }
 
-/// Chooses the resolution and builds a flat grid: the whole pipeline of `gridrt build`.
-/// Phase times: `bounds`, `resolution`, then the build's own phases.
+/// Chooses the resolution and builds a flat grid: [`structure::build`] for [`GridKind::Flat`],
+/// with the grid and its resolution choice unpacked. Phase times: `bounds`, `resolution`, then
+/// the build's own phases.
 pub fn build_flat(
     tris: &[[Vec3; 3]],
     policy: Resolution,
     model: &CostModel,
     opts: BuildOptions,
 ) -> Result<(FlatGrid, ResolutionChoice, PhaseTimes), BuildError> {
-    let mut times = PhaseTimes::default();
-    let bounds = times.record("bounds", || triangle_bounds(tris));
-    let choice =
-        times.record("resolution", || resolution::choose(tris, &bounds, policy, model, opts.insert, opts.parallel));
-    let geom = GridGeometry::new(&bounds, choice.resolution);
-    let grid = FlatGrid::build(tris, geom, opts, &mut times)?;
-    Ok((grid, choice, times))
+    let cfg = GridConfig {
+        kind: GridKind::Flat,
+        resolution: Some(policy),
+        build: opts,
+        cost: *model,
+        ..GridConfig::default()
+    };
+    let (grid, report) = structure::build(tris, &cfg)?;
+    let AnyGrid::Flat(grid) = grid else { unreachable!("structure::build returns the kind it is asked for") };
+    let choice = report.resolution_choice.expect("a flat grid always chooses a resolution");
+    Ok((grid, choice, report.times))
 }

@@ -65,29 +65,37 @@ impl MacrocellGrid {
         times: &mut PhaseTimes,
     ) -> Result<(MacrocellGrid, Vec<MacroSample>), BuildError> {
         let bounds = triangle_bounds(tris);
-        let (a, samples) = match a {
+        let build_fine =
+            |res: [u32; 3], times: &mut PhaseTimes| FlatGrid::build(tris, GridGeometry::new(&bounds, res), opts, times);
+        let (a, samples, probe) = match a {
             Some(a) => {
                 if !a.is_power_of_two() || a > 64 {
                     return Err(BuildError::InvalidParameter(format!(
                         "macrocell size {a} must be a power of two ≤ 64"
                     )));
                 }
-                (a, Vec::new())
+                (a, Vec::new(), None)
             }
             None => {
-                // Occupancy of each candidate A, from a fine grid at a resolution divisible by 16.
-                let probe = times.record("macro-size", || -> Result<Vec<MacroSample>, BuildError> {
-                    let geom = GridGeometry::new(&bounds, round_up(res, 16));
-                    let fine = FlatGrid::build(tris, geom, opts, &mut PhaseTimes::default())?;
-                    Ok(MACRO_SIZES.iter().map(|&a| sample(&fine, a)).collect())
-                })?;
-                let best = probe.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)).expect("four samples");
-                (best.a, probe)
+                // Occupancy of each candidate A, from a fine grid at a resolution divisible by 16
+                // (and so by every candidate).
+                let fine = build_fine(round_up(res, 16), times)?;
+                let samples: Vec<MacroSample> =
+                    times.record("macro-size", || MACRO_SIZES.iter().map(|&a| sample(&fine, a)).collect());
+                let best = samples.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)).expect("four samples").a;
+                (best, samples, Some(fine))
             }
         };
-        let geom = GridGeometry::new(&bounds, round_up(res, a));
-        let fine = FlatGrid::build(tris, geom, opts, times)?;
-        let grid = times.record("occupancy", || from_fine(fine, a));
+        // The probe is the final fine grid when rounding to A gives the same resolution.
+        let target = round_up(res, a);
+        let fine = match probe {
+            Some(f) if f.geom.res.to_array() == target => f,
+            _ => build_fine(target, times)?,
+        };
+        let grid = times.record("occupancy", || {
+            let (macro_res, occupancy) = occupancy(&fine, a);
+            MacrocellGrid { fine, a, macro_res, occupancy }
+        });
         Ok((grid, samples))
     }
 
@@ -153,14 +161,14 @@ fn round_up(res: [u32; 3], a: u32) -> [u32; 3] {
 }
 
 fn sample(fine: &FlatGrid, a: u32) -> MacroSample {
-    let g = from_fine(fine.clone(), a);
-    let cells = g.macro_res.x as u64 * g.macro_res.y as u64 * g.macro_res.z as u64;
-    let occupied = g.occupied_count();
+    let (macro_res, occ) = occupancy(fine, a);
+    let cells = macro_res.x as u64 * macro_res.y as u64 * macro_res.z as u64;
+    let occupied: u64 = occ.iter().map(|w| w.count_ones() as u64).sum();
     MacroSample { a, macro_cells: cells, occupied, cost: 1.0 / a as f64 + occupied as f64 / cells as f64 }
 }
 
-/// Macro occupancy of a fine grid whose resolution is a multiple of `a`.
-fn from_fine(fine: FlatGrid, a: u32) -> MacrocellGrid {
+/// Macro resolution and occupancy bits of a fine grid whose resolution is a multiple of `a`.
+fn occupancy(fine: &FlatGrid, a: u32) -> (UVec3, Vec<u32>) {
     let res = fine.geom.res;
     let macro_res = UVec3::new(res.x.div_ceil(a), res.y.div_ceil(a), res.z.div_ceil(a));
     let n = macro_res.x as usize * macro_res.y as usize * macro_res.z as usize;
@@ -178,5 +186,5 @@ fn from_fine(fine: FlatGrid, a: u32) -> MacrocellGrid {
             }
         }
     }
-    MacrocellGrid { fine, a, macro_res, occupancy }
+    (macro_res, occupancy)
 }

@@ -25,6 +25,8 @@
 use glam::Vec3;
 use gridrt_scene::Ray;
 
+use crate::traversal::argmax3;
+
 /// A ray with the per-ray constants of the watertight test.
 #[derive(Clone, Copy, Debug)]
 pub struct PreparedRay {
@@ -57,13 +59,7 @@ impl PreparedRay {
         }
         let a = dir.abs();
         // Dominant axis; ties go to the lower axis (deterministic, same rule on the GPU).
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
+        let kz = argmax3(a.to_array());
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         // Keep the winding: swap when the dominant component is negative.

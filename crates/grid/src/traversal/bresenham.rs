@@ -5,7 +5,7 @@
 
 use glam::{IVec3, UVec3};
 
-use super::CellStep;
+use super::{CellStep, argmax3};
 use crate::geometry::GridRay;
 
 #[derive(Clone, Debug)]
@@ -28,13 +28,7 @@ impl Bresenham {
         let b = ray.end_cell(res).as_ivec3();
         let delta = b - a;
         let ad = delta.abs();
-        let u = if ad.x >= ad.y && ad.x >= ad.z {
-            0
-        } else if ad.y >= ad.z {
-            1
-        } else {
-            2
-        };
+        let u = argmax3(ad.to_array());
         let n = ad[u];
         // Classic decision variable D = 2·Δminor − Δmajor.
         let err = ad * 2 - IVec3::splat(n);

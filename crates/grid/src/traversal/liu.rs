@@ -15,7 +15,7 @@
 
 use glam::{IVec3, UVec3};
 
-use super::CellStep;
+use super::{CellStep, argmax3};
 use crate::geometry::GridRay;
 
 /// Fractional bits of the fixed-point minor coordinates.
@@ -65,13 +65,7 @@ fn cell_of(x: i32, s: i32) -> i32 {
 impl Liu {
     pub fn new(ray: &GridRay, res: UVec3) -> Liu {
         let ad = ray.d.abs();
-        let u = if ad.x >= ad.y && ad.x >= ad.z {
-            0
-        } else if ad.y >= ad.z {
-            1
-        } else {
-            2
-        };
+        let u = argmax3(ad.to_array());
         let (v, w) = ((u + 1) % 3, (u + 2) % 3);
         let res_i = res.as_ivec3();
         let start = ray.start_cell(res).as_ivec3();
