@@ -1,6 +1,6 @@
 // Final colour per pixel for the five views: shaded (headlight diffuse + shadow from a point
 // light), normals, depth, heatmap of cells visited, heatmap of triangle tests.
-// Output: RGBA8 packed in a u32 per pixel. CPU port: crates/gpu/src/cpu.rs (`shade_pixel`).
+// Output: RGBA8 packed in a u32 per pixel. CPU port: crates/gpu/src/cpu.rs (`shade_pixel`, `heat`).
 //!include shared/render_bindings.wgsl
 
 @group(0) @binding(0) var<uniform> shade: ShadeParams;

@@ -1,5 +1,6 @@
 //! CPU ports of the render kernels (same names, same arithmetic as shaders/camera.wgsl,
-//! shadow.wgsl and shade.wgsl), used to render reference images and test the GPU output.
+//! shadow.wgsl, shade.wgsl and present.wgsl), used to render reference images and test the GPU
+//! output pixel by pixel.
 //! The trace kernels' CPU ports live in `gridrt-grid` (each kernel names its port).
 
 use glam::Vec3;
@@ -39,4 +40,95 @@ pub fn camera_ray(cam: &GpuCamera, x: u32, y: u32) -> Ray {
 pub fn camera_rays(cam: &GpuCamera) -> Vec<Ray> {
     let (w, h) = (cam.right[3] as u32, cam.up[3] as u32);
     (0..h).flat_map(|y| (0..w).map(move |x| camera_ray(cam, x, y))).collect()
+}
+
+/// shaders/present.wgsl's sums over a frame's primary rays.
+pub fn present_totals(hits: &[gridrt_scene::Hit], stats: &[crate::layout::GpuRayStats]) -> crate::layout::FrameTotals {
+    let cells: u64 = stats.iter().map(|s| s.cells as u64).sum();
+    let tests: u64 = stats.iter().map(|s| s.tests as u64).sum();
+    let split = |v: u64| [v as u32, (v >> 32) as u32];
+    crate::layout::FrameTotals {
+        cells: split(cells),
+        tests: split(tests),
+        hits: hits.iter().filter(|h| h.is_hit()).count() as u32,
+        rays: stats.len() as u32,
+        pad: [0; 2],
+    }
+}
+
+/// shaders/shadow.wgsl `shadow_rays_from_hits` for one pixel: the ray from the hit towards the
+/// light, or an empty ray (tmin > tmax) for a miss.
+pub fn shadow_ray(shade: &crate::layout::ShadeParams, primary: &Ray, hit: &gridrt_scene::Hit) -> Ray {
+    if !hit.is_hit() {
+        return Ray::new(Vec3::ZERO, Vec3::X, 1.0, 0.0);
+    }
+    let p = primary.at(hit.t);
+    let light = Vec3::new(shade.light[0], shade.light[1], shade.light[2]);
+    let to_light = light - p;
+    let eps = 1e-4 * shade.light[3] / to_light.length().max(1e-20);
+    Ray::new(p, to_light, eps, 1.0)
+}
+
+fn pack_rgba(c: Vec3) -> u32 {
+    let q = (c.clamp(Vec3::ZERO, Vec3::ONE) * 255.0 + 0.5).as_uvec3();
+    q.x | (q.y << 8) | (q.z << 16) | (255 << 24)
+}
+
+/// shaders/shade.wgsl `heat`: black → blue → cyan → green → yellow → red → white at x = 1.
+pub fn heat(x: f32) -> Vec3 {
+    const STOPS: [Vec3; 7] = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(1.0, 1.0, 1.0),
+    ];
+    let s = x.clamp(0.0, 1.0) * 6.0;
+    let i = (s.floor() as usize).min(5);
+    STOPS[i].lerp(STOPS[i + 1], s - i as f32)
+}
+
+/// shaders/shade.wgsl `shade_pixels` for one pixel: the packed RGBA8 colour.
+pub fn shade_pixel(
+    shade: &crate::layout::ShadeParams,
+    primary: &Ray,
+    hit: &gridrt_scene::Hit,
+    stats: &crate::layout::GpuRayStats,
+    shadow_hit: &gridrt_scene::Hit,
+    tri: [Vec3; 3],
+) -> u32 {
+    let view = shade.view[0];
+    let hmax = f32::from_bits(shade.view[1]);
+    match view {
+        3 => return pack_rgba(heat(stats.cells as f32 / hmax)),
+        4 => return pack_rgba(heat(stats.tests as f32 / hmax)),
+        _ => {}
+    }
+    if !hit.is_hit() {
+        return pack_rgba(Vec3::new(0.08, 0.09, 0.12));
+    }
+    let [a, b, c] = tri;
+    let mut n = (b - a).cross(c - a).normalize();
+    let dir = primary.d().normalize();
+    if n.dot(dir) > 0.0 {
+        n = -n;
+    }
+    if view == 1 {
+        return pack_rgba(n * 0.5 + 0.5);
+    }
+    if view == 2 {
+        let dist = hit.t * primary.d().length();
+        let x = (dist - shade.depth[0]) / (shade.depth[1] - shade.depth[0]).max(1e-20);
+        return pack_rgba(Vec3::splat(1.0 - x.clamp(0.0, 1.0)));
+    }
+    let p = primary.at(hit.t);
+    let light = Vec3::new(shade.light[0], shade.light[1], shade.light[2]);
+    let l = (light - p).normalize();
+    let lit = if shadow_hit.is_hit() { 0.0 } else { 1.0 };
+    let head = n.dot(-dir).abs();
+    let diffuse = n.dot(l).max(0.0) * lit;
+    let base = Vec3::new(0.85, 0.8, 0.72);
+    pack_rgba(base * (0.15 + 0.45 * head + 0.5 * diffuse))
 }

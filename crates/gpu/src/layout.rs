@@ -79,3 +79,24 @@ pub struct ShadeParams {
     /// x, y: depth range near / far.
     pub depth: [f32; 4],
 }
+
+/// Sums over a frame's primary rays, written by shaders/present.wgsl into an
+/// `array<atomic<u32>, 8>` (keep in sync): 64-bit counts as (lo, hi) word pairs.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct FrameTotals {
+    pub cells: [u32; 2],
+    pub tests: [u32; 2],
+    pub hits: u32,
+    pub rays: u32,
+    pub pad: [u32; 2],
+}
+
+impl FrameTotals {
+    pub fn cells(&self) -> u64 {
+        self.cells[0] as u64 | (self.cells[1] as u64) << 32
+    }
+    pub fn tests(&self) -> u64 {
+        self.tests[0] as u64 | (self.tests[1] as u64) << 32
+    }
+}

@@ -14,5 +14,5 @@ pub mod trace;
 pub mod upload;
 
 pub use context::{GpuContext, GpuError};
-pub use render::{Frame, RenderOptions, Renderer, View};
+pub use render::{Frame, FrameTarget, RenderOptions, Renderer, View};
 pub use trace::Tracer;

@@ -3,14 +3,18 @@
 //! RGBA8 pixels. Views: `shaded`, `normals`, `depth`, `heatmap-cells`, `heatmap-tests`; the
 //! heatmaps map 0 … `heat_max` onto a fixed colour scale (black, blue, cyan, green, yellow,
 //! red, white).
+//!
+//! A [`FrameTarget`] holds the buffers of one image size and is reused frame after frame (the
+//! app re-renders on every camera move). With a display texture, a last pass
+//! (`present.wgsl`) copies the pixels into it and sums the per-ray stats on the GPU, so the app
+//! reads back 32 bytes per frame instead of the per-pixel buffers.
 
 use gridrt_grid::Traversal;
 use gridrt_scene::{Aabb, Camera, Hit};
-use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
-use crate::layout::{GpuHit, GpuRayStats, GridParams, ShadeParams};
+use crate::layout::{FrameTotals, GpuHit, GpuRayStats, GridParams, ShadeParams};
 use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, read_back, traversal_code};
 use crate::upload::{GpuScene, GpuStructure};
 
@@ -81,6 +85,129 @@ pub fn light_position(bounds: &Aabb) -> glam::Vec3 {
     bounds.center() + glam::Vec3::new(0.35, 1.0, 0.55) * bounds.diagonal()
 }
 
+/// Largest image side the render pass accepts.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// The texture format of a display target (written as `rgba8unorm` storage, sampled through an
+/// sRGB view: the shaded values are already display-encoded).
+pub const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// Buffers for frames of one size, reused across frames; optionally a display texture.
+#[derive(Debug)]
+pub struct FrameTarget {
+    pub width: u32,
+    pub height: u32,
+    camera: wgpu::Buffer,
+    shade: wgpu::Buffer,
+    trace_params: wgpu::Buffer,
+    rays: wgpu::Buffer,
+    pub hits: wgpu::Buffer,
+    pub stats: wgpu::Buffer,
+    shadow_rays: wgpu::Buffer,
+    shadow_hits: wgpu::Buffer,
+    shadow_stats: wgpu::Buffer,
+    pub pixels: wgpu::Buffer,
+    totals: wgpu::Buffer,
+    /// `FrameTotals` copied here at the end of each displayed frame (MAP_READ).
+    pub totals_read: wgpu::Buffer,
+    /// RGBA8 image (display targets only): storage-written, sampled via [`Self::display_view`].
+    pub texture: Option<wgpu::Texture>,
+}
+
+/// A whole buffer as a binding.
+fn b(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+    buffer.as_entire_binding()
+}
+
+impl FrameTarget {
+    /// Allocates the buffers for `width`×`height` pixels; `display` adds the texture.
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, display: bool) -> Result<FrameTarget, GpuError> {
+        let n = width as u64 * height as u64;
+        if n == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+            return Err(GpuError::Unsupported(format!("image size {width}x{height} (1..={MAX_IMAGE_SIDE} per side)")));
+        }
+        ctx.check_buffer("camera rays", n * 32, true)?;
+        if n > ctx.device.limits().max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64 {
+            return Err(GpuError::Unsupported(format!("{n} pixels exceed one dispatch")));
+        }
+        let dev = &ctx.device;
+        let buf = |label, size: u64, usage| {
+            dev.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        use wgpu::BufferUsages as U;
+        let storage = U::STORAGE;
+        let texture = display.then(|| {
+            dev.create_texture(&wgpu::TextureDescriptor {
+                label: Some("frame image"),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: DISPLAY_FORMAT,
+                usage: wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
+            })
+        });
+        Ok(FrameTarget {
+            width,
+            height,
+            camera: buf("camera", size_of::<crate::layout::GpuCamera>() as u64, U::UNIFORM | U::COPY_DST),
+            shade: buf("shade params", size_of::<ShadeParams>() as u64, U::UNIFORM | U::COPY_DST),
+            trace_params: buf("trace params", size_of::<GridParams>() as u64, U::UNIFORM | U::COPY_DST),
+            rays: buf("primary rays", n * 32, storage),
+            hits: buf("primary hits", n * 16, storage | U::COPY_SRC),
+            stats: buf("primary stats", n * 8, storage | U::COPY_SRC),
+            shadow_rays: buf("shadow rays", n * 32, storage),
+            shadow_hits: buf("shadow hits", n * 16, storage),
+            shadow_stats: buf("shadow stats", n * 8, storage),
+            pixels: buf("pixels", n * 4, storage | U::COPY_SRC),
+            totals: buf("frame totals", size_of::<FrameTotals>() as u64, storage | U::COPY_SRC | U::COPY_DST),
+            totals_read: buf("frame totals readback", size_of::<FrameTotals>() as u64, U::MAP_READ | U::COPY_DST),
+            texture,
+        })
+    }
+
+    /// Pixels per frame.
+    pub fn pixel_count(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    /// The display texture seen as sRGB, for sampling (egui); `None` without a texture.
+    pub fn display_view(&self) -> Option<wgpu::TextureView> {
+        self.texture.as_ref().map(|t| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("frame image (sRGB view)"),
+                format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
+                ..Default::default()
+            })
+        })
+    }
+
+    /// Reads `totals_read` after its `map_async` completed, and unmaps it.
+    pub fn take_totals(&self) -> Result<FrameTotals, GpuError> {
+        let slice = self.totals_read.slice(..);
+        let view =
+            slice.get_mapped_range().map_err(|e| GpuError::Readback { what: "frame totals", detail: e.to_string() })?;
+        let t: FrameTotals = bytemuck::pod_read_unaligned(&view);
+        drop(view);
+        self.totals_read.unmap();
+        Ok(t)
+    }
+}
+
+/// The shading constants of a frame: light, view, heatmap scale, depth range.
+pub fn shade_params(bounds: &Aabb, o: &RenderOptions) -> ShadeParams {
+    let radius = bounds.diagonal() * 0.5;
+    let eye_dist = (o.camera.eye - bounds.center()).length();
+    ShadeParams {
+        light: light_position(bounds).extend(bounds.diagonal()).to_array(),
+        view: [o.view.code(), o.heat_max.max(1.0).to_bits(), o.width, o.height],
+        depth: [(eye_dist - radius).max(0.0), eye_dist + radius, 0.0, 0.0],
+    }
+}
+
 /// Render pipelines (the trace kernels come from a [`Tracer`]).
 #[derive(Debug)]
 pub struct Renderer {
@@ -88,6 +215,7 @@ pub struct Renderer {
     camera: wgpu::ComputePipeline,
     shadow: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
+    present: wgpu::ComputePipeline,
 }
 
 impl Renderer {
@@ -97,7 +225,115 @@ impl Renderer {
             camera: pipeline(ctx, "camera.wgsl", "camera_rays")?,
             shadow: pipeline(ctx, "shadow.wgsl", "shadow_rays_from_hits")?,
             shade: pipeline(ctx, "shade.wgsl", "shade_pixels")?,
+            present: pipeline(ctx, "present.wgsl", "present")?,
         })
+    }
+
+    /// Records one frame into `enc` (uniforms are written through the queue, so they land
+    /// before `enc` is submitted). A display target also gets the present pass and the totals
+    /// copied to `totals_read`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        s: &GpuStructure,
+        bounds: &Aabb,
+        o: &RenderOptions,
+        t: &FrameTarget,
+    ) -> Result<(), GpuError> {
+        if (o.width, o.height) != (t.width, t.height) {
+            return Err(GpuError::Unsupported(format!(
+                "render of {}x{} into a {}x{} target",
+                o.width, o.height, t.width, t.height
+            )));
+        }
+        let n = t.pixel_count();
+        let code = traversal_code(o.traversal)?;
+        let dev = &ctx.device;
+        let q = &ctx.queue;
+        let cam = gpu_camera(&o.camera, o.width, o.height);
+        q.write_buffer(&t.camera, 0, bytemuck::bytes_of(&cam));
+        q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&shade_params(bounds, o)));
+        let mut tp: GridParams = s.params;
+        tp.res[3] = n as u32;
+        tp.options = [code, o.mailbox as u32, s.params.options[2], 0];
+        q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
+
+        let groups = (n as u32).div_ceil(WORKGROUP);
+        let bind = |pipe: &wgpu::ComputePipeline, label, res: &[wgpu::BindingResource]| {
+            let entries: Vec<wgpu::BindGroupEntry> = res
+                .iter()
+                .enumerate()
+                .map(|(i, r)| wgpu::BindGroupEntry { binding: i as u32, resource: r.clone() })
+                .collect();
+            dev.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout: &pipe.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        };
+        let run = |enc: &mut wgpu::CommandEncoder, pipe: &wgpu::ComputePipeline, bg: &wgpu::BindGroup, label| {
+            let mut pass =
+                enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: None });
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, bg, &[]);
+            pass.dispatch_workgroups(groups, 1, 1);
+        };
+        let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), b(&t.rays)]);
+        run(enc, &self.camera, &camera_bg, "camera rays");
+        let primary = TraceBuffers {
+            params: &t.trace_params,
+            rays: &t.rays,
+            hits: &t.hits,
+            stats: &t.stats,
+            count: n as u32,
+            traversal: code,
+        };
+        self.tracer.encode(ctx, enc, scene, s, &primary)?;
+        if o.view == View::Shaded {
+            let shadow_bg =
+                bind(&self.shadow, "shadow bind group", &[b(&t.shade), b(&t.rays), b(&t.hits), b(&t.shadow_rays)]);
+            run(enc, &self.shadow, &shadow_bg, "shadow rays");
+            let shadow = TraceBuffers {
+                params: &t.trace_params,
+                rays: &t.shadow_rays,
+                hits: &t.shadow_hits,
+                stats: &t.shadow_stats,
+                count: n as u32,
+                traversal: code,
+            };
+            self.tracer.encode(ctx, enc, scene, s, &shadow)?;
+        }
+        let shade_bg = bind(
+            &self.shade,
+            "shade bind group",
+            &[b(&t.shade), b(&t.rays), b(&t.hits), b(&t.stats), b(&t.shadow_hits), b(&scene.triangles), b(&t.pixels)],
+        );
+        run(enc, &self.shade, &shade_bg, "shade");
+        if let Some(tex) = &t.texture {
+            let view = tex.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("frame image (storage view)"),
+                ..Default::default()
+            });
+            enc.clear_buffer(&t.totals, 0, None);
+            let present_bg = bind(
+                &self.present,
+                "present bind group",
+                &[
+                    b(&t.shade),
+                    b(&t.pixels),
+                    b(&t.hits),
+                    b(&t.stats),
+                    b(&t.totals),
+                    wgpu::BindingResource::TextureView(&view),
+                ],
+            );
+            run(enc, &self.present, &present_bg, "present");
+            enc.copy_buffer_to_buffer(&t.totals, 0, &t.totals_read, 0, size_of::<FrameTotals>() as u64);
+        }
+        Ok(())
     }
 
     /// Renders one frame and reads it back.
@@ -109,106 +345,11 @@ impl Renderer {
         bounds: &Aabb,
         o: &RenderOptions,
     ) -> Result<Frame, GpuError> {
-        let n = o.width as u64 * o.height as u64;
-        if n == 0 || o.width > 16384 || o.height > 16384 {
-            return Err(GpuError::Unsupported(format!("image size {}x{} (1..=16384 per side)", o.width, o.height)));
-        }
-        ctx.check_buffer("camera rays", n * 32, true)?;
-        if n > ctx.device.limits().max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64 {
-            return Err(GpuError::Unsupported(format!("{n} pixels exceed one dispatch")));
-        }
-        let code = traversal_code(o.traversal)?;
+        let t = FrameTarget::new(ctx, o.width, o.height, false)?;
+        let n = t.pixel_count();
         let dev = &ctx.device;
-        let storage = |label, size: u64, extra| {
-            dev.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE | extra,
-                mapped_at_creation: false,
-            })
-        };
-        let none = wgpu::BufferUsages::empty();
-        let src = wgpu::BufferUsages::COPY_SRC;
-        let rays = storage("primary rays", n * 32, none);
-        let hits = storage("primary hits", n * 16, src);
-        let stats = storage("primary stats", n * 8, src);
-        let shadow_rays = storage("shadow rays", n * 32, none);
-        let shadow_hits = storage("shadow hits", n * 16, none);
-        let shadow_stats = storage("shadow stats", n * 8, none);
-        let pixels = storage("pixels", n * 4, src);
-        let uniform = |label, bytes: &[u8]| {
-            dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
-        };
-        let cam = gpu_camera(&o.camera, o.width, o.height);
-        let cam_buf = uniform("camera", bytemuck::bytes_of(&cam));
-        let radius = bounds.diagonal() * 0.5;
-        let eye_dist = (o.camera.eye - bounds.center()).length();
-        let shade_params = ShadeParams {
-            light: light_position(bounds).extend(bounds.diagonal()).to_array(),
-            view: [o.view.code(), o.heat_max.max(1.0).to_bits(), o.width, o.height],
-            depth: [(eye_dist - radius).max(0.0), eye_dist + radius, 0.0, 0.0],
-        };
-        let shade_buf = uniform("shade params", bytemuck::bytes_of(&shade_params));
-        let mut tp: GridParams = s.params;
-        tp.res[3] = n as u32;
-        tp.options = [code, o.mailbox as u32, s.params.options[2], 0];
-        let trace_params = uniform("trace params", bytemuck::bytes_of(&tp));
-
-        let groups = (n as u32).div_ceil(WORKGROUP);
-        let bind = |pipe: &wgpu::ComputePipeline, label, bufs: &[&wgpu::Buffer]| {
-            let entries: Vec<wgpu::BindGroupEntry> = bufs
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
-                .collect();
-            dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(label),
-                layout: &pipe.get_bind_group_layout(0),
-                entries: &entries,
-            })
-        };
-        let camera_bg = bind(&self.camera, "camera bind group", &[&cam_buf, &rays]);
-        let shadow_bg = bind(&self.shadow, "shadow bind group", &[&shade_buf, &rays, &hits, &shadow_rays]);
-        let shade_bg = bind(
-            &self.shade,
-            "shade bind group",
-            &[&shade_buf, &rays, &hits, &stats, &shadow_hits, &scene.triangles, &pixels],
-        );
         let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render") });
-        let run = |enc: &mut wgpu::CommandEncoder, pipe: &wgpu::ComputePipeline, bg: &wgpu::BindGroup, label| {
-            let mut pass =
-                enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: None });
-            pass.set_pipeline(pipe);
-            pass.set_bind_group(0, bg, &[]);
-            pass.dispatch_workgroups(groups, 1, 1);
-        };
-        run(&mut enc, &self.camera, &camera_bg, "camera rays");
-        let primary = TraceBuffers {
-            params: &trace_params,
-            rays: &rays,
-            hits: &hits,
-            stats: &stats,
-            count: n as u32,
-            traversal: code,
-        };
-        self.tracer.encode(ctx, &mut enc, scene, s, &primary)?;
-        if o.view == View::Shaded {
-            run(&mut enc, &self.shadow, &shadow_bg, "shadow rays");
-            let shadow = TraceBuffers {
-                params: &trace_params,
-                rays: &shadow_rays,
-                hits: &shadow_hits,
-                stats: &shadow_stats,
-                count: n as u32,
-                traversal: code,
-            };
-            self.tracer.encode(ctx, &mut enc, scene, s, &shadow)?;
-        }
-        run(&mut enc, &self.shade, &shade_bg, "shade");
+        self.encode(ctx, &mut enc, scene, s, bounds, o, &t)?;
         let read = |label, size| {
             dev.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -220,9 +361,9 @@ impl Renderer {
         let pixels_read = read("pixels readback", n * 4);
         let hits_read = read("hits readback", n * 16);
         let stats_read = read("stats readback", n * 8);
-        enc.copy_buffer_to_buffer(&pixels, 0, &pixels_read, 0, n * 4);
-        enc.copy_buffer_to_buffer(&hits, 0, &hits_read, 0, n * 16);
-        enc.copy_buffer_to_buffer(&stats, 0, &stats_read, 0, n * 8);
+        enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, n * 4);
+        enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, n * 16);
+        enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, n * 8);
         ctx.queue.submit([enc.finish()]);
         let px: Vec<u32> = read_back(ctx, &pixels_read, n * 4, "pixels")?;
         let h: Vec<GpuHit> = read_back(ctx, &hits_read, n * 16, "hits")?;

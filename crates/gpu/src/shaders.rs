@@ -12,6 +12,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("camera.wgsl", include_str!("../../../shaders/camera.wgsl")),
     ("shadow.wgsl", include_str!("../../../shaders/shadow.wgsl")),
     ("shade.wgsl", include_str!("../../../shaders/shade.wgsl")),
+    ("present.wgsl", include_str!("../../../shaders/present.wgsl")),
     ("shared/types.wgsl", include_str!("../../../shaders/shared/types.wgsl")),
     ("shared/bindings.wgsl", include_str!("../../../shaders/shared/bindings.wgsl")),
     ("shared/ray.wgsl", include_str!("../../../shaders/shared/ray.wgsl")),
