@@ -8,13 +8,57 @@ use gridrt_grid::twolevel::TwoLevelOptions;
 use gridrt_grid::{BuildOptions, CostModel, GridConfig, GridKind, InsertMode, Resolution, Traversal};
 
 #[derive(Debug, Parser)]
-#[command(name = "gridrt", version, about = "Grid ray tracer and grid-structure laboratory", long_about = None)]
+#[command(
+    name = "gridrt",
+    version,
+    about = "Grid ray tracer and grid-structure laboratory",
+    long_about = "Grid ray tracer and grid-structure laboratory.\n\nWithout a subcommand, opens the desktop app \
+                  (on SCENE, or on the embedded default scene); the subcommands run each stage from the command line.",
+    args_conflicts_with_subcommands = true
+)]
 pub struct Cli {
     /// Worker threads for parallel builds and tracing (default: all cores).
     #[arg(long, global = true)]
     pub threads: Option<usize>,
+    #[command(flatten)]
+    pub app: AppArgs,
     #[command(subcommand)]
     pub command: Option<Command>,
+}
+
+/// Options of the desktop app (no subcommand).
+#[derive(Debug, Args, Clone, Default)]
+pub struct AppArgs {
+    /// Scene to open (.glb or .gltf); default: the embedded default scene.
+    pub scene: Option<PathBuf>,
+    /// Smoke mode: render `--frames` frames in the real window, save a screenshot of it to
+    /// this PNG and exit (non-zero on any error).
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Frames to render before the screenshot.
+    #[arg(long, default_value_t = 3, requires = "screenshot")]
+    pub frames: u32,
+    /// Grid structure to start with (overrides the saved settings).
+    #[arg(long, value_parser = parse_grid)]
+    pub grid: Option<GridKind>,
+    /// View to start with: shaded, normals, depth, heatmap-cells, heatmap-tests.
+    #[arg(long)]
+    pub view: Option<String>,
+    /// Traversal to start with: aw, cw or liu.
+    #[arg(long, value_parser = parse_traversal)]
+    pub traversal: Option<Traversal>,
+    /// Windows to open at start (repeatable): cost-model, explainer.
+    #[arg(long, value_enum)]
+    pub open: Vec<AppWindow>,
+}
+
+/// The app's extra windows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AppWindow {
+    /// The cost-model plot.
+    CostModel,
+    /// The 2-D traversal explainer.
+    Explainer,
 }
 
 #[derive(Debug, Subcommand)]
@@ -33,6 +77,8 @@ pub enum Command {
     Render(RenderArgs),
     /// Measure Mrays/s of the CPU (all threads) and the GPU on primary and random rays.
     BenchTrace(BenchTraceArgs),
+    /// Build and trace the embedded default scene on the CPU, check against brute force, print a summary.
+    Demo,
 }
 
 /// A scene: a .glb/.gltf path, or `@default` for the embedded default scene.

@@ -1,9 +1,9 @@
-//! `gridrt`: the command-line front end. Without a subcommand it runs the demo (builds and
-//! traces the embedded default scene and prints a summary); the subcommands expose each stage
-//! of the pipeline: scene → grid → trace → hits.
+//! `gridrt`: without a subcommand it opens the desktop app (egui on wgpu); the subcommands
+//! expose each stage of the pipeline from the command line: scene → grid → trace → hits.
 
 mod cli;
 mod commands;
+mod gui;
 
 use clap::Parser;
 
@@ -14,7 +14,8 @@ fn main() -> anyhow::Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global()?;
     }
     match cli.command {
-        None => commands::demo::run(),
+        None => gui::run_native(cli.app),
+        Some(cli::Command::Demo) => commands::demo::run(),
         Some(cli::Command::Info(a)) => commands::info::run(a),
         Some(cli::Command::Build(a)) => commands::build::run(a),
         Some(cli::Command::Gen(a)) => commands::generate::run(a),

@@ -134,7 +134,7 @@ fn help_on_everything_and_default_scene() {
 
 #[test]
 fn demo_runs_and_checks_itself() {
-    let out = ok(&[]);
+    let out = ok(&["demo"]);
     assert!(out.contains("brute-force check: 2000 of 2000"), "{out}");
 }
 
@@ -193,4 +193,105 @@ fn gpu_trace_and_render() {
     fails(&["render", s(&scene), "--size", "0x10", "-o", s(&png)], "width and height");
     let bench = ok(&["bench-trace", s(&scene), "--rays", "2000", "--repeat", "1"]);
     assert!(bench.contains("GPU Mrays/s") && bench.contains("primary") && bench.contains("random"), "{bench}");
+}
+
+/// An Xvfb server on a free display, killed on drop.
+struct Xvfb {
+    child: std::process::Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Xvfb {
+        for n in 90..200 {
+            if Path::new(&format!("/tmp/.X{n}-lock")).exists() || Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
+                continue;
+            }
+            let child = Command::new("Xvfb")
+                .args([&format!(":{n}"), "-screen", "0", "1280x800x24", "-nolisten", "tcp"])
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::null())
+                .spawn()
+                .expect("starting Xvfb (apt-get install xvfb; .ci/run installs it)");
+            let mut x = Xvfb { child, display: format!(":{n}") };
+            for _ in 0..100 {
+                if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
+                    return x;
+                }
+                if let Ok(Some(status)) = x.child.try_wait() {
+                    panic!("Xvfb :{n} exited: {status}");
+                }
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+            panic!("Xvfb :{n} did not come up");
+        }
+        panic!("no free X display");
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The central image region of a screenshot (between the side panels), as RGB triples.
+fn centre_pixels(img: &image::RgbaImage) -> Vec<[u8; 3]> {
+    let (w, h) = img.dimensions();
+    let mut v = Vec::new();
+    for y in (h / 4)..(3 * h / 4) {
+        for x in (2 * w / 5)..(3 * w / 5) {
+            let p = img.get_pixel(x, y).0;
+            v.push([p[0], p[1], p[2]]);
+        }
+    }
+    v
+}
+
+/// The desktop app in its real window, under Xvfb on the software adapter: for every grid
+/// kind a few frames are rendered and the window is saved; the images are not blank, and the
+/// cells-visited heatmaps of the flat and macrocell grids differ on teapot-in-stadium.
+#[test]
+fn app_screenshots_under_xvfb() {
+    if std::env::var("GRIDRT_SKIP_GPU_TESTS").is_ok_and(|v| v == "1") {
+        eprintln!("GRIDRT_SKIP_GPU_TESTS=1: skipping");
+        return;
+    }
+    let x = Xvfb::start();
+    let scene = tmp("app-teapot.glb");
+    ok(&["gen", "teapot-in-stadium", "-o", s(&scene)]);
+    let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let shot = |grid: &str, view: &str| -> image::RgbaImage {
+        let png = out_dir.join(format!("app-{grid}-{view}.png"));
+        let _ = std::fs::remove_file(&png);
+        let out = Command::new(env!("CARGO_BIN_EXE_gridrt"))
+            .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--grid", grid, "--view", view])
+            .env("DISPLAY", &x.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("running the app");
+        let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success(), "app --grid {grid} --view {view} failed:\n{log}");
+        assert!(log.contains("saved"), "{log}");
+        println!("{grid} {view}: {}", log.lines().find(|l| l.contains("saved")).unwrap_or_default());
+        image::open(&png).expect("reading the screenshot").to_rgba8()
+    };
+    for grid in ["flat", "macrocell", "multires", "twolevel", "proximity"] {
+        let img = shot(grid, "shaded");
+        assert!(img.width() >= 640 && img.height() >= 400, "{grid}: {}x{}", img.width(), img.height());
+        let px = centre_pixels(&img);
+        let mut colours = px.clone();
+        colours.sort();
+        colours.dedup();
+        assert!(colours.len() > 50, "{grid}: the image looks blank ({} colours)", colours.len());
+        // The scene is lit: a fair share of the centre is brighter than the background.
+        let bright = px.iter().filter(|p| p.iter().map(|&c| c as u32).sum::<u32>() > 200).count();
+        assert!(bright * 10 > px.len(), "{grid}: only {bright} of {} centre pixels are lit", px.len());
+    }
+    let flat = centre_pixels(&shot("flat", "heatmap-cells"));
+    let macrocell = centre_pixels(&shot("macrocell", "heatmap-cells"));
+    let differ = flat.iter().zip(&macrocell).filter(|(a, b)| a != b).count();
+    println!("heatmap-cells: {differ} of {} centre pixels differ between flat and macrocell", flat.len());
+    assert!(differ * 20 > flat.len(), "flat and macrocell heatmaps should differ: {differ} of {}", flat.len());
 }

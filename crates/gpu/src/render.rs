@@ -180,6 +180,8 @@ impl FrameTarget {
             t.create_view(&wgpu::TextureViewDescriptor {
                 label: Some("frame image (sRGB view)"),
                 format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
+                // sRGB formats cannot be storage-bound: this view is for sampling only.
+                usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
                 ..Default::default()
             })
         })

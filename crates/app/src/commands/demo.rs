@@ -1,6 +1,6 @@
-//! `gridrt` with no arguments: builds a grid over the embedded default scene, traces primary
+//! `gridrt demo`: builds a grid over the embedded default scene, traces primary
 //! and random rays with every exact traversal, checks a sample against brute force, and prints
-//! a summary. (The desktop app replaces this when it lands.)
+//! a summary, no window needed.
 
 use std::time::Instant;
 

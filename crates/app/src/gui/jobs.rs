@@ -1,0 +1,150 @@
+//! Work that must not block the UI: loading a scene and building a structure run on a thread
+//! (natively) and hand their result back through a channel; the UI polls each frame and shows
+//! a spinner with the elapsed time meanwhile. On wasm, where std threads do not exist, the job
+//! runs when it is spawned (the browser demo keeps its scenes small).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+
+use glam::Vec3;
+use gridrt_grid::{AnyGrid, BuildReport, GridConfig, structure};
+use gridrt_scene::{Aabb, LoadReport};
+use web_time::Instant;
+
+/// A scene ready for building: triangles shared with build threads.
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    pub name: String,
+    pub tris: Arc<Vec<[Vec3; 3]>>,
+    pub bounds: Aabb,
+    pub report: LoadReport,
+}
+
+/// Where a scene comes from.
+#[derive(Debug, Clone)]
+pub enum SceneSource {
+    Default,
+    Path(PathBuf),
+    /// A dropped file's contents (the browser gives bytes, not a path).
+    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+    Bytes {
+        name: String,
+        bytes: Arc<[u8]>,
+    },
+}
+
+impl SceneSource {
+    pub fn label(&self) -> String {
+        match self {
+            SceneSource::Default => gridrt_scene::DEFAULT_SCENE_NAME.to_string(),
+            SceneSource::Path(p) => p.display().to_string(),
+            SceneSource::Bytes { name, .. } => name.clone(),
+        }
+    }
+}
+
+/// Loads and validates a scene; the error is the loader's message, for the UI.
+pub fn load_scene(source: &SceneSource) -> Result<LoadedScene, String> {
+    let (mesh, report) = match source {
+        SceneSource::Default => gridrt_scene::load_default(),
+        SceneSource::Path(p) => gridrt_scene::gltf_load::load_path(p).map_err(|e| e.to_string())?,
+        SceneSource::Bytes { name, bytes } => {
+            gridrt_scene::gltf_load::load_slice(bytes, name, None).map_err(|e| e.to_string())?
+        }
+    };
+    if mesh.triangle_count() == 0 {
+        return Err(format!("{}: the scene has no triangles", source.label()));
+    }
+    let name = match source {
+        SceneSource::Path(p) => p.file_name().map_or_else(|| source.label(), |f| f.to_string_lossy().into_owned()),
+        _ => source.label(),
+    };
+    Ok(LoadedScene { name, tris: Arc::new(mesh.triangles()), bounds: mesh.bounds(), report })
+}
+
+/// A structure built for one scene (by scene generation number) and configuration.
+#[derive(Debug)]
+pub struct Built {
+    pub scene_generation: u64,
+    pub config: GridConfig,
+    pub grid: AnyGrid,
+    pub report: BuildReport,
+}
+
+/// Builds `config` over `tris`.
+pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation: u64) -> Result<Built, String> {
+    let (grid, report) =
+        structure::build(tris, config).map_err(|e| format!("building the {} grid: {e}", config.kind))?;
+    Ok(Built { scene_generation, config: *config, grid, report })
+}
+
+/// One background job and its result channel.
+#[derive(Debug)]
+pub struct Job<T> {
+    rx: Receiver<T>,
+    pub started: Instant,
+    pub what: String,
+}
+
+impl<T: Send + 'static> Job<T> {
+    /// Runs `f` off the UI thread and wakes the UI when it is done.
+    pub fn spawn(
+        what: impl Into<String>,
+        ui: &eframe::egui::Context,
+        f: impl FnOnce() -> T + Send + 'static,
+    ) -> Job<T> {
+        let (tx, rx) = channel();
+        let ui = ui.clone();
+        let run = move || {
+            let _ = tx.send(f());
+            ui.request_repaint();
+        };
+        #[cfg(not(target_arch = "wasm32"))]
+        std::thread::Builder::new().name("gridrt job".into()).spawn(run).expect("spawning a job thread");
+        #[cfg(target_arch = "wasm32")]
+        run();
+        Job { rx, started: Instant::now(), what: what.into() }
+    }
+
+    /// The result once the job is done; `Some(Err)` if the job's thread died.
+    pub fn poll(&mut self) -> Option<Result<T, String>> {
+        match self.rx.try_recv() {
+            Ok(v) => Some(Ok(v)),
+            Err(TryRecvError::Empty) => None,
+            Err(TryRecvError::Disconnected) => Some(Err(format!("{} stopped unexpectedly (a panic?)", self.what))),
+        }
+    }
+
+    pub fn elapsed_s(&self) -> f64 {
+        self.started.elapsed().as_secs_f64()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scenes_load_from_bytes_and_bad_files_give_messages() {
+        let bytes: Arc<[u8]> = gridrt_scene::DEFAULT_SCENE_GLB.into();
+        let s = load_scene(&SceneSource::Bytes { name: "dropped.glb".into(), bytes }).unwrap();
+        assert_eq!(s.tris.len(), s.report.triangles);
+        assert!(s.tris.len() > 1000);
+        let bad: Arc<[u8]> = b"glTF\x02\x00\x00\x00garbage".as_slice().into();
+        let e = load_scene(&SceneSource::Bytes { name: "bad.glb".into(), bytes: bad }).unwrap_err();
+        assert!(e.contains("bad.glb"), "{e}");
+        let e = load_scene(&SceneSource::Path("/nonexistent/x.glb".into())).unwrap_err();
+        assert!(e.contains("x.glb"), "{e}");
+    }
+
+    #[test]
+    fn builds_report_the_configuration_they_were_asked_for() {
+        let s = load_scene(&SceneSource::Default).unwrap();
+        let cfg = GridConfig { kind: gridrt_grid::GridKind::Macrocell, ..GridConfig::default() };
+        let b = build_structure(&s.tris, &cfg, 7).unwrap();
+        assert_eq!((b.scene_generation, b.config, b.grid.kind()), (7, cfg, gridrt_grid::GridKind::Macrocell));
+        let bad = GridConfig { macro_size: Some(3), ..cfg };
+        assert!(build_structure(&s.tris, &bad, 7).unwrap_err().contains("macrocell"));
+    }
+}

@@ -1,0 +1,714 @@
+//! The desktop (and browser) app: eframe on wgpu, sharing eframe's device with `gridrt-gpu`.
+//!
+//! Data flows one way, as in the library: a scene (loaded off the UI thread) → a structure
+//! (built off the UI thread) → GPU buffers → a rendered texture and its stats. The UI edits
+//! [`Settings`]; when the wanted structure differs from the built one a rebuild starts (the
+//! previous structure stays on screen meanwhile), and when anything the image depends on
+//! changes a frame is rendered.
+
+pub mod cost_plot;
+pub mod explainer;
+pub mod jobs;
+pub mod orbit;
+pub mod panels;
+pub mod settings;
+pub mod viewport;
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use eframe::egui::{self, Key, PointerButton, Sense, Vec2};
+use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_gpu::{RenderOptions, View};
+use gridrt_grid::{GridConfig, GridKind, Resolution};
+use gridrt_scene::Camera;
+use web_time::Instant;
+
+use crate::cli::AppArgs;
+use jobs::{Built, Job, LoadedScene, SceneSource};
+use orbit::Orbit;
+use settings::Settings;
+use viewport::{Gpu, Viewport};
+
+/// How a smoke run (`--screenshot`) ended: `Ok(message)` or `Err(reason)`.
+pub type SmokeStatus = Arc<Mutex<Option<Result<String, String>>>>;
+
+/// `--screenshot out.png --frames N`: render N frames, save the window, exit.
+#[derive(Debug)]
+struct Smoke {
+    path: PathBuf,
+    frames: u32,
+    requested: bool,
+    shot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
+    status: SmokeStatus,
+    started: Instant,
+}
+
+/// Seconds a smoke run may take before it gives up.
+const SMOKE_TIMEOUT_S: f64 = 600.0;
+
+#[derive(Debug)]
+struct SceneState {
+    loaded: LoadedScene,
+    gpu: Option<GpuScene>,
+    generation: u64,
+}
+
+#[derive(Debug)]
+struct BuiltState {
+    built: Built,
+    gpu: Option<GpuStructure>,
+    /// Changes with every new structure (part of the render key).
+    id: u64,
+}
+
+/// Everything a frame depends on: a new frame is rendered when this changes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RenderKey {
+    camera: Camera,
+    view: View,
+    traversal: gridrt_grid::Traversal,
+    mailbox: bool,
+    heat_max: f32,
+    size: [u32; 2],
+    structure: u64,
+}
+
+pub struct GridrtApp {
+    settings: Settings,
+    smoke: Option<Smoke>,
+    gpu: Option<Gpu>,
+    gpu_error: Option<String>,
+    scene: Option<SceneState>,
+    scene_generation: u64,
+    scene_job: Option<Job<Result<LoadedScene, String>>>,
+    build_job: Option<Job<Result<Built, String>>>,
+    built: Option<BuiltState>,
+    built_counter: u64,
+    orbit: Orbit,
+    viewport: Viewport,
+    last_key: Option<RenderKey>,
+    /// A load or build error, shown until dismissed; the previous scene stays.
+    error: Option<String>,
+    build_error: Option<(GridConfig, String)>,
+    measurement: cost_plot::Measurement,
+    measure_job: Option<Job<Result<Built, String>>>,
+}
+
+impl std::fmt::Debug for GridrtApp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GridrtApp").field("settings", &self.settings).finish_non_exhaustive()
+    }
+}
+
+impl GridrtApp {
+    pub fn new(cc: &eframe::CreationContext<'_>, args: AppArgs, status: SmokeStatus) -> GridrtApp {
+        let smoke = args.screenshot.clone().map(|path| Smoke {
+            path,
+            frames: args.frames.max(1),
+            requested: false,
+            shot: Default::default(),
+            status,
+            started: Instant::now(),
+        });
+        // A smoke run ignores saved settings so that it is reproducible.
+        let mut settings: Settings = match (&smoke, cc.storage) {
+            (None, Some(st)) => eframe::get_value(st, settings::STORAGE_KEY).unwrap_or_default(),
+            _ => Settings::default(),
+        };
+        if let Some(k) = args.grid {
+            settings.grid.kind = k;
+        }
+        if let Some(v) = &args.view {
+            settings.view = v.clone();
+        }
+        if let Some(t) = args.traversal {
+            settings.traversal = t;
+        }
+        if smoke.is_some() {
+            settings.render_scale = 1.0;
+        }
+        for w in &args.open {
+            match w {
+                crate::cli::AppWindow::CostModel => settings.show_cost_plot = true,
+                crate::cli::AppWindow::Explainer => settings.show_explainer = true,
+            }
+        }
+        let (gpu, gpu_error) = match cc.wgpu_render_state.as_ref() {
+            Some(rs) => match Gpu::new(rs) {
+                Ok(g) => (Some(g), None),
+                Err(e) => (None, Some(format!("GPU setup failed: {e}"))),
+            },
+            None => (None, Some("eframe started without a wgpu device".to_string())),
+        };
+        let mut app = GridrtApp {
+            settings,
+            smoke,
+            gpu,
+            gpu_error,
+            scene: None,
+            scene_generation: 0,
+            scene_job: None,
+            build_job: None,
+            built: None,
+            built_counter: 0,
+            orbit: Orbit::fit(&gridrt_scene::Aabb::from_points(&[glam::Vec3::ZERO, glam::Vec3::ONE]), 1.5),
+            viewport: Viewport::default(),
+            last_key: None,
+            error: None,
+            build_error: None,
+            measurement: Default::default(),
+            measure_job: None,
+        };
+        let source = args.scene.map_or(SceneSource::Default, SceneSource::Path);
+        app.open(&cc.egui_ctx, source);
+        app
+    }
+
+    /// Starts loading a scene; the current one stays until the new one is ready.
+    fn open(&mut self, ctx: &egui::Context, source: SceneSource) {
+        let label = source.label();
+        self.scene_job = Some(Job::spawn(format!("loading {label}"), ctx, move || jobs::load_scene(&source)));
+    }
+
+    fn view(&self) -> View {
+        self.settings.view.parse().unwrap_or_default()
+    }
+
+    fn fail_smoke(&mut self, ctx: &egui::Context, why: String) {
+        if let Some(s) = &self.smoke {
+            *s.status.lock().expect("smoke status") = Some(Err(why));
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+    }
+
+    /// Collects finished jobs and starts the builds the settings ask for.
+    fn poll_jobs(&mut self, ctx: &egui::Context) {
+        if let Some(job) = &mut self.scene_job
+            && let Some(r) = job.poll()
+        {
+            self.scene_job = None;
+            match r.and_then(|r| r) {
+                Ok(loaded) => self.set_scene(loaded),
+                Err(e) => {
+                    self.error = Some(e.clone());
+                    self.fail_smoke(ctx, e);
+                }
+            }
+        }
+        if let Some(job) = &mut self.build_job
+            && let Some(r) = job.poll()
+        {
+            self.build_job = None;
+            match r.and_then(|r| r) {
+                Ok(b) if Some(b.scene_generation) == self.scene.as_ref().map(|s| s.generation) => self.set_built(b),
+                Ok(_) => {} // built for a scene that has been replaced since
+                Err(e) => {
+                    self.build_error = Some((self.settings.grid, e.clone()));
+                    self.fail_smoke(ctx, e);
+                }
+            }
+        }
+        // Rebuild when the wanted structure differs from the built one (one build at a time;
+        // the newest settings win when it finishes).
+        if self.build_job.is_none()
+            && let Some(scene) = &self.scene
+        {
+            let want = self.settings.grid;
+            let have = self.built.as_ref().map(|b| (b.built.scene_generation, b.built.config));
+            let failed = self.build_error.as_ref().is_some_and(|(c, _)| *c == want);
+            if have != Some((scene.generation, want)) && !failed {
+                self.build_error = None;
+                let tris = scene.loaded.tris.clone();
+                let generation = scene.generation;
+                self.build_job = Some(Job::spawn(format!("building the {} grid", want.kind), ctx, move || {
+                    jobs::build_structure(&tris, &want, generation)
+                }));
+            }
+        }
+        self.poll_measurement(ctx);
+    }
+
+    fn set_scene(&mut self, loaded: LoadedScene) {
+        self.scene_generation += 1;
+        let gpu_scene = self.gpu.as_ref().and_then(|g| match GpuScene::new(&g.ctx, &loaded.tris) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                self.error = Some(format!("{}: {e}", loaded.name));
+                None
+            }
+        });
+        let aspect = self.last_key.map_or(1.0, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
+        self.orbit = Orbit::fit(&loaded.bounds, aspect);
+        self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
+        self.measurement = Default::default();
+        self.build_error = None;
+    }
+
+    fn set_built(&mut self, built: Built) {
+        let gpu = self.gpu.as_ref().and_then(|g| match GpuStructure::new(&g.ctx, &built.grid) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                self.error = Some(format!("uploading the {} grid: {e}", built.config.kind));
+                None
+            }
+        });
+        self.built_counter += 1;
+        self.built = Some(BuiltState { built, gpu, id: self.built_counter });
+    }
+
+    /// The cost-plot measurement: builds the next sampled resolution off the UI thread, then
+    /// renders it once, timed.
+    fn poll_measurement(&mut self, ctx: &egui::Context) {
+        if let Some(job) = &mut self.measure_job
+            && let Some(r) = job.poll()
+        {
+            self.measure_job = None;
+            match r.and_then(|r| r) {
+                Ok(b) => self.time_frame(&b),
+                Err(e) => {
+                    self.error = Some(e);
+                    self.measurement.pending.clear();
+                }
+            }
+        }
+        if self.measure_job.is_none()
+            && !self.measurement.pending.is_empty()
+            && let Some(scene) = &self.scene
+        {
+            let res = self.measurement.pending[0];
+            let cfg =
+                GridConfig { kind: GridKind::Flat, resolution: Some(Resolution::Explicit(res)), ..self.settings.grid };
+            let tris = scene.loaded.tris.clone();
+            let generation = scene.generation;
+            self.measure_job =
+                Some(Job::spawn("measuring", ctx, move || jobs::build_structure(&tris, &cfg, generation)));
+        }
+    }
+
+    #[cfg(not(target_arch = "wasm32"))]
+    fn time_frame(&mut self, b: &Built) {
+        let res = self.measurement.pending.remove(0);
+        let (Some(gpu), Some(scene), Some(key)) = (&self.gpu, &self.scene, self.last_key) else { return };
+        let Some(gs) = &scene.gpu else { return };
+        let s = match GpuStructure::new(&gpu.ctx, &b.grid) {
+            Ok(s) => s,
+            Err(e) => {
+                self.error = Some(e.to_string());
+                return;
+            }
+        };
+        let opts = self.render_options(key.camera, key.size);
+        self.viewport.wait(gpu);
+        match self.viewport.submit(gpu, gs, &s, &scene.loaded.bounds, &opts) {
+            Ok(_) => {
+                self.viewport.wait(gpu);
+                if let Some(f) = self.viewport.last {
+                    let m = (res[0] as f64 * res[1] as f64 * res[2] as f64).cbrt();
+                    self.measurement.results.push((m, f.ms));
+                }
+            }
+            Err(e) => self.error = Some(e.to_string()),
+        }
+        // The measured frame replaced the image: render the real structure again.
+        self.last_key = None;
+    }
+
+    #[cfg(target_arch = "wasm32")]
+    fn time_frame(&mut self, _b: &Built) {
+        // Timing needs a blocking wait, which the browser does not allow.
+        self.measurement.pending.clear();
+        self.error = Some("frame-time measurement is not available in the browser".into());
+    }
+
+    fn render_options(&self, camera: Camera, size: [u32; 2]) -> RenderOptions {
+        RenderOptions {
+            width: size[0],
+            height: size[1],
+            camera,
+            view: self.view(),
+            traversal: self.settings.traversal,
+            mailbox: self.settings.mailbox,
+            heat_max: self.settings.heat_max,
+        }
+    }
+
+    fn menu(&mut self, ui: &mut egui::Ui) {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                #[cfg(not(target_arch = "wasm32"))]
+                if ui.button("Open…").clicked() {
+                    if let Some(p) = rfd::FileDialog::new().add_filter("glTF", &["glb", "gltf"]).pick_file() {
+                        self.open(ui.ctx(), SceneSource::Path(p));
+                    }
+                    ui.close();
+                }
+                if ui.button("Default scene").clicked() {
+                    self.open(ui.ctx(), SceneSource::Default);
+                    ui.close();
+                }
+                #[cfg(not(target_arch = "wasm32"))]
+                if ui.button("Save image…").clicked() {
+                    self.save_image();
+                    ui.close();
+                }
+                #[cfg(not(target_arch = "wasm32"))]
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("Windows", |ui| {
+                ui.checkbox(&mut self.settings.show_cost_plot, "Cost model");
+                ui.checkbox(&mut self.settings.show_explainer, "Traversal explainer");
+            });
+            if ui.button("Reset camera").clicked() {
+                self.reset_camera();
+            }
+            ui.label("drag: orbit · right/shift-drag: pan · wheel: zoom · F: reset · drop a .glb to open");
+        });
+    }
+
+    fn reset_camera(&mut self) {
+        if let Some(s) = &self.scene {
+            let aspect = self.last_key.map_or(1.5, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
+            self.orbit = Orbit::fit(&s.loaded.bounds, aspect);
+        }
+    }
+
+    #[cfg(not(target_arch = "wasm32"))]
+    fn save_image(&mut self) {
+        let Some(path) = rfd::FileDialog::new().add_filter("PNG", &["png"]).set_file_name("gridrt.png").save_file()
+        else {
+            return;
+        };
+        let (Some(gpu), Some(scene), Some(b), Some(key)) = (&self.gpu, &self.scene, &self.built, self.last_key) else {
+            return;
+        };
+        let (Some(gs), Some(s)) = (&scene.gpu, &b.gpu) else { return };
+        let opts = self.render_options(key.camera, key.size);
+        let result =
+            gpu.renderer.render(&gpu.ctx, gs, s, &scene.loaded.bounds, &opts).map_err(|e| e.to_string()).and_then(
+                |f| {
+                    image::save_buffer(&path, &f.rgba, f.width, f.height, image::ExtendedColorType::Rgba8)
+                        .map_err(|e| e.to_string())
+                },
+            );
+        if let Err(e) = result {
+            self.error = Some(format!("saving {}: {e}", path.display()));
+        }
+    }
+
+    /// Camera input on the image: mouse and keys.
+    fn camera_input(&mut self, ui: &egui::Ui, resp: &egui::Response) {
+        let d = resp.drag_delta();
+        let shift = ui.input(|i| i.modifiers.shift);
+        let h = resp.rect.height().max(1.0);
+        if resp.dragged_by(PointerButton::Primary) && !shift {
+            self.orbit.rotate(d.x * 0.008, d.y * 0.008);
+        } else if resp.dragged_by(PointerButton::Secondary)
+            || resp.dragged_by(PointerButton::Middle)
+            || (resp.dragged_by(PointerButton::Primary) && shift)
+        {
+            self.orbit.pan(d.x / h, d.y / h);
+        }
+        if resp.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.orbit.zoom((-scroll * 0.0015).exp());
+            }
+        }
+        if resp.double_clicked() {
+            self.reset_camera();
+        }
+        if ui.ctx().egui_wants_keyboard_input() {
+            return;
+        }
+        let step = 0.04;
+        let (l, r, u, dn, zin, zout, reset) = ui.input(|i| {
+            (
+                i.key_down(Key::ArrowLeft) || i.key_down(Key::A),
+                i.key_down(Key::ArrowRight) || i.key_down(Key::D),
+                i.key_down(Key::ArrowUp) || i.key_down(Key::W),
+                i.key_down(Key::ArrowDown) || i.key_down(Key::S),
+                i.key_down(Key::Plus) || i.key_down(Key::Equals) || i.key_down(Key::E),
+                i.key_down(Key::Minus) || i.key_down(Key::Q),
+                i.key_pressed(Key::F) || i.key_pressed(Key::Home),
+            )
+        });
+        if l {
+            self.orbit.rotate(-step, 0.0);
+        }
+        if r {
+            self.orbit.rotate(step, 0.0);
+        }
+        if u {
+            self.orbit.rotate(0.0, step);
+        }
+        if dn {
+            self.orbit.rotate(0.0, -step);
+        }
+        if zin {
+            self.orbit.zoom(0.96);
+        }
+        if zout {
+            self.orbit.zoom(1.04);
+        }
+        if reset {
+            self.reset_camera();
+        }
+        if l || r || u || dn || zin || zout {
+            ui.ctx().request_repaint();
+        }
+    }
+
+    /// The central image; submits a frame when the render key changed.
+    fn central(&mut self, ui: &mut egui::Ui) {
+        let avail = ui.available_size();
+        let ppp = ui.ctx().pixels_per_point();
+        let scale = self.settings.render_scale.clamp(0.05, 1.0);
+        let size = [
+            ((avail.x * ppp * scale).round() as u32).clamp(1, gridrt_gpu::render::MAX_IMAGE_SIDE),
+            ((avail.y * ppp * scale).round() as u32).clamp(1, gridrt_gpu::render::MAX_IMAGE_SIDE),
+        ];
+        let (rect, resp) = ui.allocate_exact_size(avail, Sense::click_and_drag());
+        self.camera_input(ui, &resp);
+        if let Some(tex) = self.viewport.texture() {
+            let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+            ui.painter().image(tex, rect, uv, egui::Color32::WHITE);
+        }
+        if let Some(job) = &self.scene_job {
+            ui.put(
+                egui::Rect::from_center_size(rect.center(), Vec2::new(320.0, 40.0)),
+                egui::Label::new(format!("{}… {:.1} s", job.what, job.elapsed_s())),
+            );
+        }
+        let Some(gpu) = &self.gpu else { return };
+        self.viewport.poll(gpu);
+        let (Some(scene), Some(b)) = (&self.scene, &self.built) else { return };
+        let (Some(gs), Some(s)) = (&scene.gpu, &b.gpu) else { return };
+        if b.built.scene_generation != scene.generation {
+            return;
+        }
+        let key = RenderKey {
+            camera: self.orbit.camera(),
+            view: self.view(),
+            traversal: self.settings.traversal,
+            mailbox: self.settings.mailbox,
+            heat_max: self.settings.heat_max,
+            size,
+            structure: b.id,
+        };
+        let smoke_wants_frames = self.smoke.as_ref().is_some_and(|s| self.viewport.frames_done < s.frames as u64);
+        if Some(key) != self.last_key || self.viewport.dirty || smoke_wants_frames {
+            self.viewport.dirty = true;
+            let opts = self.render_options(key.camera, size);
+            match self.viewport.submit(gpu, gs, s, &scene.loaded.bounds, &opts) {
+                Ok(true) => self.last_key = Some(key),
+                Ok(false) => {}
+                Err(e) => {
+                    self.viewport.dirty = false;
+                    self.last_key = Some(key);
+                    self.viewport.error = Some(e.to_string());
+                }
+            }
+        }
+        if self.viewport.busy() || self.viewport.dirty {
+            ui.ctx().request_repaint();
+        }
+    }
+
+    /// Smoke mode: once enough frames are done, screenshot the window, save it and close.
+    fn smoke_step(&mut self, ctx: &egui::Context) {
+        let frames_done = self.viewport.frames_done;
+        let Some(s) = &mut self.smoke else { return };
+        ctx.request_repaint();
+        if s.started.elapsed().as_secs_f64() > SMOKE_TIMEOUT_S {
+            let why = format!("smoke run timed out after {SMOKE_TIMEOUT_S} s ({frames_done} frames done)");
+            self.fail_smoke(ctx, why);
+            return;
+        }
+        if !s.requested && frames_done >= s.frames as u64 && !self.viewport.busy() {
+            s.requested = true;
+            let shot = s.shot.clone();
+            ctx.request_screenshot(move |img| *shot.lock().expect("screenshot") = Some(img));
+            return;
+        }
+        let Some(img) = s.shot.lock().expect("screenshot").take() else { return };
+        let rgba: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
+        let [w, h] = img.size;
+        let result = image::save_buffer(&s.path, &rgba, w as u32, h as u32, image::ExtendedColorType::Rgba8)
+            .map(|()| {
+                let f = self.viewport.last;
+                format!(
+                    "saved {}x{} screenshot to {} after {frames_done} frames{}",
+                    w,
+                    h,
+                    s.path.display(),
+                    f.map_or(String::new(), |f| format!(
+                        " (last frame {}x{}: {:.1} ms, {:.2} cells/ray, {:.2} tests/ray)",
+                        f.width,
+                        f.height,
+                        f.ms,
+                        f.mean_cells(),
+                        f.mean_tests()
+                    ))
+                )
+            })
+            .map_err(|e| format!("writing {}: {e}", s.path.display()));
+        *s.status.lock().expect("smoke status") = Some(result);
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+    }
+
+    /// A .glb/.gltf dropped on the window opens (the first one, if several).
+    #[cfg(not(target_arch = "wasm32"))]
+    fn dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        if let Some(f) = dropped.into_iter().next() {
+            self.open(ctx, SceneSource::Path(f.path().to_path_buf()));
+        }
+    }
+}
+
+impl eframe::App for GridrtApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.poll_jobs(&ctx);
+        self.dropped_files(&ctx);
+        if self.scene_job.is_some() || self.build_job.is_some() || self.measure_job.is_some() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(100));
+        }
+        egui::Panel::top("menu").show(ui, |ui| self.menu(ui));
+        egui::Panel::left("controls").resizable(true).default_size(290.0).size_range(200.0..=480.0).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                let built = self.built.as_ref().map(|b| &b.built);
+                panels::controls(ui, &mut self.settings, built);
+            });
+        });
+        egui::Panel::right("stats").resizable(true).default_size(270.0).size_range(180.0..=480.0).show(ui, |ui| {
+            ui.heading("Stats");
+            let adapter = self.gpu.as_ref().map_or("none".to_string(), |g| g.ctx.adapter_name());
+            let scene = self.scene.as_ref().map(|s| &s.loaded);
+            let building = self
+                .build_job
+                .as_ref()
+                .map(|j| (j.what.clone(), j.elapsed_s()))
+                .or_else(|| self.scene_job.as_ref().map(|j| (j.what.clone(), j.elapsed_s())));
+            panels::stats(
+                ui,
+                &adapter,
+                scene,
+                self.built.as_ref().map(|b| &b.built),
+                building,
+                self.viewport.last.as_ref(),
+            );
+            for e in [&self.gpu_error, &self.viewport.error].into_iter().flatten() {
+                ui.colored_label(ui.visuals().error_fg_color, e);
+            }
+            if let Some((_, e)) = &self.build_error {
+                ui.colored_label(ui.visuals().error_fg_color, e);
+            }
+            if let Some(e) = self.error.clone() {
+                ui.separator();
+                ui.colored_label(ui.visuals().error_fg_color, e);
+                if ui.button("dismiss").clicked() {
+                    self.error = None;
+                }
+            }
+        });
+        egui::CentralPanel::default().show(ui, |ui| self.central(ui));
+
+        let mut open = self.settings.show_cost_plot;
+        egui::Window::new("Cost model").open(&mut open).default_pos([330.0, 40.0]).default_size([520.0, 420.0]).show(
+            &ctx,
+            |ui| {
+                let choice = self.built.as_ref().and_then(|b| b.built.report.resolution_choice.as_ref());
+                let view = cost_plot::CostView {
+                    curve: choice.map(|c| c.curve.as_slice()),
+                    chosen: choice.map(|c| c.resolution),
+                    policy: choice.map_or("kind default".into(), |c| format!("{:?}", c.policy)),
+                    measurement: &self.measurement,
+                };
+                if cost_plot::ui(ui, &view)
+                    && let Some(c) = choice
+                {
+                    self.measurement = cost_plot::Measurement {
+                        pending: c.curve.iter().map(|s| s.resolution).collect(),
+                        results: Vec::new(),
+                        total: c.curve.len(),
+                    };
+                }
+            },
+        );
+        self.settings.show_cost_plot = open;
+        let mut open = self.settings.show_explainer;
+        egui::Window::new("Traversal explainer")
+            .open(&mut open)
+            .default_pos([360.0, 110.0])
+            .default_size([560.0, 520.0])
+            .show(&ctx, |ui| {
+                explainer::ui(ui, &mut self.settings.explainer);
+            });
+        self.settings.show_explainer = open;
+        self.smoke_step(&ctx);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        if self.smoke.is_none() {
+            eframe::set_value(storage, settings::STORAGE_KEY, &self.settings);
+        }
+    }
+}
+
+/// wgpu setup shared by the native and web mains: the device asks for the limits gridrt's
+/// kernels need (within what the adapter offers), plus a texture size for large windows.
+pub fn wgpu_options() -> eframe::egui_wgpu::WgpuConfiguration {
+    use eframe::egui_wgpu::{WgpuConfiguration, WgpuSetup, WgpuSetupCreateNew};
+    let mut setup = WgpuSetupCreateNew::without_display_handle();
+    setup.device_descriptor = Arc::new(|adapter| {
+        let offered = adapter.limits();
+        let mut limits = gridrt_gpu::context::required_limits(&offered);
+        limits.max_texture_dimension_2d =
+            offered.max_texture_dimension_2d.min(8192).max(limits.max_texture_dimension_2d);
+        wgpu::DeviceDescriptor { label: Some("gridrt app device"), required_limits: limits, ..Default::default() }
+    });
+    // WGPU_ADAPTER_NAME picks the adapter by name, as for the command line.
+    #[cfg(not(target_arch = "wasm32"))]
+    if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
+        let wanted = wanted.to_lowercase();
+        setup.native_adapter_selector = Some(Arc::new(move |adapters, _surface| {
+            adapters.iter().find(|a| a.get_info().name.to_lowercase().contains(&wanted)).cloned().ok_or_else(|| {
+                let found: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+                format!("WGPU_ADAPTER_NAME matches no adapter; found {found:?}")
+            })
+        }));
+    }
+    WgpuConfiguration { wgpu_setup: WgpuSetup::CreateNew(setup), ..Default::default() }
+}
+
+/// Runs the desktop app (blocking until its window closes).
+#[cfg(not(target_arch = "wasm32"))]
+pub fn run_native(args: AppArgs) -> anyhow::Result<()> {
+    let status: SmokeStatus = Default::default();
+    let smoke = args.screenshot.is_some();
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default().with_inner_size([1280.0, 800.0]).with_title("gridrt"),
+        wgpu_options: wgpu_options(),
+        persist_window: !smoke,
+        ..Default::default()
+    };
+    let st = status.clone();
+    eframe::run_native(
+        "gridrt",
+        options,
+        Box::new(move |cc| Ok(Box::new(GridrtApp::new(cc, args, st)) as Box<dyn eframe::App>)),
+    )
+    .map_err(|e| anyhow::anyhow!("the app failed: {e}"))?;
+    if smoke {
+        match status.lock().expect("smoke status").take() {
+            Some(Ok(msg)) => println!("{msg}"),
+            Some(Err(e)) => anyhow::bail!("smoke run failed: {e}"),
+            None => anyhow::bail!("the window closed before the screenshot was taken"),
+        }
+    }
+    Ok(())
+}

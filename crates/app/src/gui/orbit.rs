@@ -1,0 +1,65 @@
+//! The viewer's camera: orbit around a target, pan, zoom; reset frames the scene bounds the way
+//! `--camera auto` does ([`Camera::fit`]).
+
+use glam::Vec3;
+use gridrt_scene::{Aabb, Camera};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orbit {
+    pub target: Vec3,
+    /// Radians around +Y, 0 looking down −Z.
+    pub yaw: f32,
+    /// Radians above the horizon.
+    pub pitch: f32,
+    pub distance: f32,
+    pub vfov_deg: f32,
+    /// Scene size, for pan speed and zoom limits.
+    pub scale: f32,
+}
+
+/// Pitch stops short of the poles, where the up vector would flip.
+const MAX_PITCH: f32 = 1.55;
+
+impl Orbit {
+    /// The orbit matching [`Camera::fit`] for these bounds and aspect.
+    pub fn fit(bounds: &Aabb, aspect: f32) -> Orbit {
+        let cam = Camera::fit(bounds, aspect);
+        let offset = cam.eye - cam.target;
+        let distance = offset.length().max(1e-6);
+        let dir = offset / distance;
+        Orbit {
+            target: cam.target,
+            yaw: dir.x.atan2(dir.z),
+            pitch: dir.y.clamp(-1.0, 1.0).asin(),
+            distance,
+            vfov_deg: cam.vfov_deg,
+            scale: bounds.diagonal().max(1e-6),
+        }
+    }
+
+    pub fn camera(&self) -> Camera {
+        let dir = Vec3::new(self.pitch.cos() * self.yaw.sin(), self.pitch.sin(), self.pitch.cos() * self.yaw.cos());
+        Camera { eye: self.target + dir * self.distance, target: self.target, up: Vec3::Y, vfov_deg: self.vfov_deg }
+    }
+
+    /// Rotates by screen-space angles (radians).
+    pub fn rotate(&mut self, d_yaw: f32, d_pitch: f32) {
+        self.yaw -= d_yaw;
+        self.pitch = (self.pitch + d_pitch).clamp(-MAX_PITCH, MAX_PITCH);
+    }
+
+    /// Moves the target in the view plane by a fraction of the view height.
+    pub fn pan(&mut self, dx: f32, dy: f32) {
+        let cam = self.camera();
+        let fwd = (cam.target - cam.eye).normalize();
+        let right = fwd.cross(Vec3::Y).normalize_or(Vec3::X);
+        let up = right.cross(fwd);
+        let h = 2.0 * self.distance * (self.vfov_deg.to_radians() * 0.5).tan();
+        self.target += (-right * dx + up * dy) * h;
+    }
+
+    /// Multiplies the distance by `factor`, within sane limits of the scene size.
+    pub fn zoom(&mut self, factor: f32) {
+        self.distance = (self.distance * factor).clamp(self.scale * 1e-4, self.scale * 100.0);
+    }
+}
