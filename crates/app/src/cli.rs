@@ -47,6 +47,12 @@ pub struct AppArgs {
     /// Traversal to start with: aw, cw or liu.
     #[arg(long, value_parser = parse_traversal)]
     pub traversal: Option<Traversal>,
+    /// Camera to start with: eye_x,eye_y,eye_z,target_x,target_y,target_z,fov (default: frame the scene).
+    #[arg(long, value_parser = parse_camera)]
+    pub camera: Option<gridrt_scene::Camera>,
+    /// Rendered pixels per screen pixel, 0.05..=1 (default: saved setting; 1 in smoke mode).
+    #[arg(long)]
+    pub render_scale: Option<f32>,
     /// Windows to open at start (repeatable): cost-model, explainer.
     #[arg(long, value_enum)]
     pub open: Vec<AppWindow>,
@@ -364,4 +370,8 @@ pub struct BenchTraceArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+fn parse_camera(s: &str) -> Result<gridrt_scene::Camera, String> {
+    gridrt_scene::Camera::parse(s)
 }

@@ -88,8 +88,8 @@ pub fn light_position(bounds: &Aabb) -> glam::Vec3 {
 /// Largest image side the render pass accepts.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
-/// The texture format of a display target (written as `rgba8unorm` storage, sampled through an
-/// sRGB view: the shaded values are already display-encoded).
+/// The texture format of a display target: `rgba8unorm` holding display-encoded (gamma) values,
+/// what egui expects of a texture it samples (it blends in gamma space).
 pub const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// Buffers for frames of one size, reused across frames; optionally a display texture.
@@ -147,7 +147,7 @@ impl FrameTarget {
                 usage: wgpu::TextureUsages::STORAGE_BINDING
                     | wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
+                view_formats: &[],
             })
         });
         Ok(FrameTarget {
@@ -174,13 +174,11 @@ impl FrameTarget {
         self.width as u64 * self.height as u64
     }
 
-    /// The display texture seen as sRGB, for sampling (egui); `None` without a texture.
+    /// A sampling view of the display texture (for egui); `None` without a texture.
     pub fn display_view(&self) -> Option<wgpu::TextureView> {
         self.texture.as_ref().map(|t| {
             t.create_view(&wgpu::TextureViewDescriptor {
-                label: Some("frame image (sRGB view)"),
-                format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
-                // sRGB formats cannot be storage-bound: this view is for sampling only.
+                label: Some("frame image (sampling view)"),
                 usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
                 ..Default::default()
             })

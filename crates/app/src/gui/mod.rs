@@ -93,6 +93,8 @@ pub struct GridrtApp {
     build_error: Option<(GridConfig, String)>,
     measurement: cost_plot::Measurement,
     measure_job: Option<Job<Result<Built, String>>>,
+    /// `--camera`: used for the first scene instead of framing it.
+    initial_camera: Option<Camera>,
 }
 
 impl std::fmt::Debug for GridrtApp {
@@ -128,6 +130,9 @@ impl GridrtApp {
         if smoke.is_some() {
             settings.render_scale = 1.0;
         }
+        if let Some(r) = args.render_scale {
+            settings.render_scale = r.clamp(0.05, 1.0);
+        }
         for w in &args.open {
             match w {
                 crate::cli::AppWindow::CostModel => settings.show_cost_plot = true,
@@ -159,6 +164,7 @@ impl GridrtApp {
             build_error: None,
             measurement: Default::default(),
             measure_job: None,
+            initial_camera: args.camera,
         };
         let source = args.scene.map_or(SceneSource::Default, SceneSource::Path);
         app.open(&cc.egui_ctx, source);
@@ -239,7 +245,10 @@ impl GridrtApp {
             }
         });
         let aspect = self.last_key.map_or(1.0, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
-        self.orbit = Orbit::fit(&loaded.bounds, aspect);
+        self.orbit = match self.initial_camera.take() {
+            Some(cam) => Orbit::from_camera(&cam, &loaded.bounds),
+            None => Orbit::fit(&loaded.bounds, aspect),
+        };
         self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
         self.measurement = Default::default();
         self.build_error = None;

@@ -23,17 +23,21 @@ const MAX_PITCH: f32 = 1.55;
 impl Orbit {
     /// The orbit matching [`Camera::fit`] for these bounds and aspect.
     pub fn fit(bounds: &Aabb, aspect: f32) -> Orbit {
-        let cam = Camera::fit(bounds, aspect);
+        Orbit::from_camera(&Camera::fit(bounds, aspect), bounds)
+    }
+
+    /// The orbit through a given camera (its eye, target and field of view).
+    pub fn from_camera(cam: &Camera, bounds: &Aabb) -> Orbit {
         let offset = cam.eye - cam.target;
         let distance = offset.length().max(1e-6);
         let dir = offset / distance;
         Orbit {
             target: cam.target,
             yaw: dir.x.atan2(dir.z),
-            pitch: dir.y.clamp(-1.0, 1.0).asin(),
+            pitch: dir.y.clamp(-1.0, 1.0).asin().clamp(-MAX_PITCH, MAX_PITCH),
             distance,
             vfov_deg: cam.vfov_deg,
-            scale: bounds.diagonal().max(1e-6),
+            scale: bounds.diagonal().max(distance).max(1e-6),
         }
     }
 
@@ -61,5 +65,27 @@ impl Orbit {
     /// Multiplies the distance by `factor`, within sane limits of the scene size.
     pub fn zoom(&mut self, factor: f32) {
         self.distance = (self.distance * factor).clamp(self.scale * 1e-4, self.scale * 100.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_orbit_reproduces_its_camera_and_moves_sensibly() {
+        let bounds = Aabb { min: Vec3::splat(-1.0), max: Vec3::new(3.0, 1.0, 1.0) };
+        let fit = Camera::fit(&bounds, 1.5);
+        let mut o = Orbit::fit(&bounds, 1.5);
+        let c = o.camera();
+        assert!((c.eye - fit.eye).length() < 1e-4 && c.target == fit.target, "{c:?} vs {fit:?}");
+        let d0 = (c.eye - c.target).length();
+        o.zoom(0.5);
+        assert!(((o.camera().eye - o.camera().target).length() - d0 * 0.5).abs() < 1e-4);
+        o.rotate(0.0, 10.0);
+        assert!(o.pitch <= MAX_PITCH, "pitch is clamped short of the pole");
+        let before = o.target;
+        o.pan(0.1, 0.0);
+        assert!((o.target - before).length() > 0.0 && (o.target - before).y.abs() < 1e-5);
     }
 }

@@ -117,7 +117,7 @@ impl Viewport {
         let Some(result) = f.done.lock().expect("frame lock").take() else { return false };
         let f = self.in_flight.take().expect("in flight");
         let target = self.target.as_ref().expect("a frame in flight has a target");
-        match result.map_err(|e| e).and_then(|()| target.take_totals().map_err(|e| e.to_string())) {
+        match result.and_then(|()| target.take_totals().map_err(|e| e.to_string())) {
             Ok(totals) => {
                 self.last = Some(FrameStats {
                     width: target.width,

@@ -95,7 +95,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
     let (grid, _) = structure::build(&tris, &GridConfig::default()).unwrap();
     let gs = GpuStructure::new(ctx, &grid).unwrap();
     let target = FrameTarget::new(ctx, w, h, true).unwrap();
-    // The sampling view the app hands to egui is valid (sRGB, not storage-bound).
+    // The sampling view the app hands to egui is valid.
     let _view = target.display_view().unwrap();
     assert!(FrameTarget::new(ctx, w, h, false).unwrap().display_view().is_none());
     let cam = gpu_camera(&camera, w, h);
