@@ -56,6 +56,10 @@ pub struct AppArgs {
     /// Windows to open at start (repeatable): cost-model, explainer.
     #[arg(long, value_enum)]
     pub open: Vec<AppWindow>,
+    /// Start the cost-model window's frame-time measurement once the first structure is built
+    /// (implies --open cost-model; a smoke run waits for it).
+    #[arg(long)]
+    pub measure: bool,
 }
 
 /// The app's extra windows.

@@ -296,4 +296,36 @@ fn app_screenshots_under_xvfb() {
     let differ = flat.iter().zip(&macrocell).filter(|(a, b)| a != b).count();
     println!("heatmap-cells: {differ} of {} centre pixels differ between flat and macrocell", flat.len());
     assert!(differ * 20 > flat.len(), "flat and macrocell heatmaps should differ: {differ} of {}", flat.len());
+
+    // The cost-model window's measurement: a flat grid timed at every sampled resolution.
+    let png = out_dir.join("app-cost-model.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_gridrt"))
+        .args(["--screenshot", s(&png), "--frames", "1", "--measure", "--render-scale", "0.3", "--open", "explainer"])
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("running the app");
+    let log = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "--measure failed: {log}{}", String::from_utf8_lossy(&out.stderr));
+    let timed: usize = log
+        .split("cost model: ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no measurement in: {log}"));
+    assert!(timed >= 2, "{log}");
+    println!("{log}");
+
+    // A scene that does not load: the app says why and exits non-zero.
+    let bad = tmp("app-bad.glb");
+    std::fs::write(&bad, b"glTF\x02\x00\x00\x00 not really").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gridrt"))
+        .args([s(&bad), "--screenshot", s(&out_dir.join("app-bad.png")), "--frames", "1"])
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("running the app");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a bad scene must fail the smoke run");
+    assert!(err.contains("app-bad.glb"), "the error names the file: {err}");
 }

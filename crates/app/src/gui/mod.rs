@@ -95,7 +95,19 @@ pub struct GridrtApp {
     measure_job: Option<Job<Result<Built, String>>>,
     /// `--camera`: used for the first scene instead of framing it.
     initial_camera: Option<Camera>,
+    /// When the camera last moved, and the resolution factor used while it moves.
+    last_interaction: Option<Instant>,
+    interactive_factor: f32,
+    factor_frame: u64,
+    /// `--measure`: start the cost-model measurement when a structure with a cost curve is up.
+    measure_at_start: bool,
 }
+
+/// While the camera moves, frames slower than this are rendered at a lower resolution; the
+/// full resolution follows when the camera rests.
+const INTERACTIVE_FRAME_MS: f64 = 60.0;
+/// How long after the last camera move the view counts as resting.
+const REST_AFTER_S: f64 = 0.3;
 
 impl std::fmt::Debug for GridrtApp {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -133,6 +145,9 @@ impl GridrtApp {
         if let Some(r) = args.render_scale {
             settings.render_scale = r.clamp(0.05, 1.0);
         }
+        if args.measure {
+            settings.show_cost_plot = true;
+        }
         for w in &args.open {
             match w {
                 crate::cli::AppWindow::CostModel => settings.show_cost_plot = true,
@@ -165,6 +180,10 @@ impl GridrtApp {
             measurement: Default::default(),
             measure_job: None,
             initial_camera: args.camera,
+            last_interaction: None,
+            interactive_factor: 1.0,
+            factor_frame: 0,
+            measure_at_start: args.measure,
         };
         let source = args.scene.map_or(SceneSource::Default, SceneSource::Path);
         app.open(&cc.egui_ctx, source);
@@ -232,6 +251,14 @@ impl GridrtApp {
                 }));
             }
         }
+        if self.measure_at_start && self.last_key.is_some() && self.built.is_some() && self.build_job.is_none() {
+            self.measure_at_start = false;
+            if !self.start_measurement() {
+                let why = "--measure: the structure has no sampled cost curve (use a flat or macrocell grid with auto resolution)";
+                self.error = Some(why.into());
+                self.fail_smoke(ctx, why.into());
+            }
+        }
         self.poll_measurement(ctx);
     }
 
@@ -264,6 +291,21 @@ impl GridrtApp {
         });
         self.built_counter += 1;
         self.built = Some(BuiltState { built, gpu, id: self.built_counter });
+    }
+
+    /// Starts timing a flat grid at each resolution the cost model sampled (false when the
+    /// current structure has no sampled curve).
+    fn start_measurement(&mut self) -> bool {
+        let Some(c) = self.built.as_ref().and_then(|b| b.built.report.resolution_choice.as_ref()) else { return false };
+        if c.curve.is_empty() {
+            return false;
+        }
+        self.measurement = cost_plot::Measurement {
+            pending: c.curve.iter().map(|s| s.resolution).collect(),
+            results: Vec::new(),
+            total: c.curve.len(),
+        };
+        true
     }
 
     /// The cost-plot measurement: builds the next sampled resolution off the UI thread, then
@@ -474,13 +516,31 @@ impl GridrtApp {
     fn central(&mut self, ui: &mut egui::Ui) {
         let avail = ui.available_size();
         let ppp = ui.ctx().pixels_per_point();
-        let scale = self.settings.render_scale.clamp(0.05, 1.0);
+        let (rect, resp) = ui.allocate_exact_size(avail, Sense::click_and_drag());
+        let before = self.orbit;
+        self.camera_input(ui, &resp);
+        if self.orbit != before {
+            self.last_interaction = Some(Instant::now());
+        }
+        let moving = self.last_interaction.is_some_and(|t| t.elapsed().as_secs_f64() < REST_AFTER_S);
+        if !moving {
+            self.interactive_factor = 1.0;
+        } else {
+            // One adjustment per finished frame, towards INTERACTIVE_FRAME_MS (pixels ~ factor²).
+            if let Some(f) = self.viewport.last
+                && self.viewport.frames_done != self.factor_frame
+            {
+                self.factor_frame = self.viewport.frames_done;
+                self.interactive_factor =
+                    (self.interactive_factor * (INTERACTIVE_FRAME_MS / f.ms).sqrt() as f32).clamp(0.2, 1.0);
+            }
+            ui.ctx().request_repaint_after(std::time::Duration::from_secs_f64(REST_AFTER_S));
+        }
+        let scale = self.settings.render_scale.clamp(0.05, 1.0) * self.interactive_factor;
         let size = [
             ((avail.x * ppp * scale).round() as u32).clamp(1, gridrt_gpu::render::MAX_IMAGE_SIDE),
             ((avail.y * ppp * scale).round() as u32).clamp(1, gridrt_gpu::render::MAX_IMAGE_SIDE),
         ];
-        let (rect, resp) = ui.allocate_exact_size(avail, Sense::click_and_drag());
-        self.camera_input(ui, &resp);
         if let Some(tex) = self.viewport.texture() {
             let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
             ui.painter().image(tex, rect, uv, egui::Color32::WHITE);
@@ -536,7 +596,8 @@ impl GridrtApp {
             self.fail_smoke(ctx, why);
             return;
         }
-        if !s.requested && frames_done >= s.frames as u64 && !self.viewport.busy() {
+        let measuring = self.measure_at_start || self.measurement.running() || self.measure_job.is_some();
+        if !s.requested && frames_done >= s.frames as u64 && !self.viewport.busy() && !measuring {
             s.requested = true;
             let shot = s.shot.clone();
             ctx.request_screenshot(move |img| *shot.lock().expect("screenshot") = Some(img));
@@ -549,7 +610,7 @@ impl GridrtApp {
             .map(|()| {
                 let f = self.viewport.last;
                 format!(
-                    "saved {}x{} screenshot to {} after {frames_done} frames{}",
+                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}",
                     w,
                     h,
                     s.path.display(),
@@ -560,7 +621,16 @@ impl GridrtApp {
                         f.ms,
                         f.mean_cells(),
                         f.mean_tests()
-                    ))
+                    )),
+                    match self.measurement.results.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+                        Some(best) => format!(
+                            "; cost model: {} resolutions timed, fastest m = {:.1} ({:.1} ms)",
+                            self.measurement.results.len(),
+                            best.0,
+                            best.1
+                        ),
+                        None => String::new(),
+                    }
                 )
             })
             .map_err(|e| format!("writing {}: {e}", s.path.display()));
