@@ -4,14 +4,14 @@
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<storage, read_write> out_rays: array<Ray>;
+@group(0) @binding(2) var<uniform> shade: ShadeParams;
 
 @compute @workgroup_size(64)
 fn camera_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
     let w = u32(camera.right.w);
-    let h = u32(camera.up.w);
-    let i = gid.x;
-    if i >= w * h {
+    if gid.x >= shade.tile.y {
         return;
     }
-    out_rays[i] = camera_ray(camera, i % w, i / w);
+    let p = shade.tile.x + gid.x;
+    out_rays[gid.x] = camera_ray(camera, p % w, p / w);
 }

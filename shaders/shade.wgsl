@@ -30,7 +30,7 @@ fn heat(x: f32) -> vec3<f32> {
 @compute @workgroup_size(64)
 fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if i >= shade.view.z * shade.view.w {
+    if i >= shade.tile.y {
         return;
     }
     let view = shade.view.x;

@@ -11,7 +11,7 @@
 @compute @workgroup_size(64)
 fn shadow_rays_from_hits(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if i >= shade.view.z * shade.view.w {
+    if i >= shade.tile.y {
         return;
     }
     let h = primary_hits[i];

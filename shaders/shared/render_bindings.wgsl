@@ -20,6 +20,9 @@ struct ShadeParams {
     view: vec4<u32>,
     // x, y: depth near / far.
     depth: vec4<f32>,
+    // x: first pixel of this dispatch (a tile of the frame); y: pixels in it. The per-pixel
+    // buffers are bound from the tile's first pixel, so kernels index them from 0.
+    tile: vec4<u32>,
 }
 
 // The primary ray of pixel (x, y), row 0 at the top. CPU port: crates/gpu/src/cpu.rs.

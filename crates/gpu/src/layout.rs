@@ -78,6 +78,8 @@ pub struct ShadeParams {
     pub view: [u32; 4],
     /// x, y: depth range near / far.
     pub depth: [f32; 4],
+    /// x: first pixel of this dispatch (a tile of the frame); y: pixels in it.
+    pub tile: [u32; 4],
 }
 
 /// Sums over a frame's primary rays, written by shaders/present.wgsl into an

@@ -15,7 +15,7 @@ use gridrt_scene::{Aabb, Camera, Hit};
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
 use crate::layout::{FrameTotals, GpuHit, GpuRayStats, GridParams, ShadeParams};
-use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, read_back, traversal_code};
+use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, tile_quantum, traversal_code};
 use crate::upload::{GpuScene, GpuStructure};
 
 /// What the image shows (`--view`).
@@ -205,6 +205,7 @@ pub fn shade_params(bounds: &Aabb, o: &RenderOptions) -> ShadeParams {
         light: light_position(bounds).extend(bounds.diagonal()).to_array(),
         view: [o.view.code(), o.heat_max.max(1.0).to_bits(), o.width, o.height],
         depth: [(eye_dist - radius).max(0.0), eye_dist + radius, 0.0, 0.0],
+        tile: [0, o.width * o.height, 0, 0],
     }
 }
 
@@ -229,9 +230,7 @@ impl Renderer {
         })
     }
 
-    /// Records one frame into `enc` (uniforms are written through the queue, so they land
-    /// before `enc` is submitted). A display target also gets the present pass and the totals
-    /// copied to `totals_read`.
+    /// Records one whole frame into `enc` as a single tile (see [`Renderer::encode_tile`]).
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
@@ -243,6 +242,31 @@ impl Renderer {
         o: &RenderOptions,
         t: &FrameTarget,
     ) -> Result<(), GpuError> {
+        self.encode_tile(ctx, enc, scene, s, bounds, o, t, 0, t.pixel_count() as u32)
+    }
+
+    /// Records pixels `[first, first + count)` of a frame (row-major) into `enc`: camera rays,
+    /// trace, shadow rays and trace (shaded view), shading, and for a display target the copy
+    /// into the texture and the stats totals (cleared by the tile at pixel 0, copied to
+    /// `totals_read` by the last tile). The per-pixel buffers are bound from `first`.
+    ///
+    /// Uniforms are written through the queue, so **each tile must be submitted before the
+    /// next one is encoded**. Tiles keep each submission short: the app stays responsive on a
+    /// software adapter, and a browser never sees a dispatch long enough to lose the device.
+    /// `first` must be a multiple of [`tile_quantum`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_tile(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        s: &GpuStructure,
+        bounds: &Aabb,
+        o: &RenderOptions,
+        t: &FrameTarget,
+        first: u32,
+        count: u32,
+    ) -> Result<(), GpuError> {
         if (o.width, o.height) != (t.width, t.height) {
             return Err(GpuError::Unsupported(format!(
                 "render of {}x{} into a {}x{} target",
@@ -250,18 +274,26 @@ impl Renderer {
             )));
         }
         let n = t.pixel_count();
+        if count == 0 || first as u64 + count as u64 > n || first % tile_quantum(ctx) != 0 {
+            return Err(GpuError::Unsupported(format!(
+                "tile of {count} pixels at {first} in a frame of {n} (tiles start at multiples of {})",
+                tile_quantum(ctx)
+            )));
+        }
         let code = traversal_code(o.traversal)?;
         let dev = &ctx.device;
         let q = &ctx.queue;
         let cam = gpu_camera(&o.camera, o.width, o.height);
         q.write_buffer(&t.camera, 0, bytemuck::bytes_of(&cam));
-        q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&shade_params(bounds, o)));
+        let mut sp = shade_params(bounds, o);
+        sp.tile = [first, count, 0, 0];
+        q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&sp));
         let mut tp: GridParams = s.params;
-        tp.res[3] = n as u32;
-        tp.options = [code, o.mailbox as u32, s.params.options[2], 0];
+        tp.res[3] = count;
+        tp.options = [code, o.mailbox as u32, s.params.options[2], first];
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
 
-        let groups = (n as u32).div_ceil(WORKGROUP);
+        let groups = count.div_ceil(WORKGROUP);
         let bind = |pipe: &wgpu::ComputePipeline, label, res: &[wgpu::BindingResource]| {
             let entries: Vec<wgpu::BindGroupEntry> = res
                 .iter()
@@ -281,27 +313,33 @@ impl Renderer {
             pass.set_bind_group(0, bg, &[]);
             pass.dispatch_workgroups(groups, 1, 1);
         };
-        let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), b(&t.rays)]);
+        let r = |buf, stride| range(buf, first, count, stride);
+        let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), r(&t.rays, 32), b(&t.shade)]);
         run(enc, &self.camera, &camera_bg, "camera rays");
         let primary = TraceBuffers {
             params: &t.trace_params,
             rays: &t.rays,
             hits: &t.hits,
             stats: &t.stats,
-            count: n as u32,
+            first,
+            count,
             traversal: code,
         };
         self.tracer.encode(ctx, enc, scene, s, &primary)?;
         if o.view == View::Shaded {
-            let shadow_bg =
-                bind(&self.shadow, "shadow bind group", &[b(&t.shade), b(&t.rays), b(&t.hits), b(&t.shadow_rays)]);
+            let shadow_bg = bind(
+                &self.shadow,
+                "shadow bind group",
+                &[b(&t.shade), r(&t.rays, 32), r(&t.hits, 16), r(&t.shadow_rays, 32)],
+            );
             run(enc, &self.shadow, &shadow_bg, "shadow rays");
             let shadow = TraceBuffers {
                 params: &t.trace_params,
                 rays: &t.shadow_rays,
                 hits: &t.shadow_hits,
                 stats: &t.shadow_stats,
-                count: n as u32,
+                first,
+                count,
                 traversal: code,
             };
             self.tracer.encode(ctx, enc, scene, s, &shadow)?;
@@ -309,7 +347,15 @@ impl Renderer {
         let shade_bg = bind(
             &self.shade,
             "shade bind group",
-            &[b(&t.shade), b(&t.rays), b(&t.hits), b(&t.stats), b(&t.shadow_hits), b(&scene.triangles), b(&t.pixels)],
+            &[
+                b(&t.shade),
+                r(&t.rays, 32),
+                r(&t.hits, 16),
+                r(&t.stats, 8),
+                r(&t.shadow_hits, 16),
+                b(&scene.triangles),
+                r(&t.pixels, 4),
+            ],
         );
         run(enc, &self.shade, &shade_bg, "shade");
         if let Some(tex) = &t.texture {
@@ -317,21 +363,25 @@ impl Renderer {
                 label: Some("frame image (storage view)"),
                 ..Default::default()
             });
-            enc.clear_buffer(&t.totals, 0, None);
+            if first == 0 {
+                enc.clear_buffer(&t.totals, 0, None);
+            }
             let present_bg = bind(
                 &self.present,
                 "present bind group",
                 &[
                     b(&t.shade),
-                    b(&t.pixels),
-                    b(&t.hits),
-                    b(&t.stats),
+                    r(&t.pixels, 4),
+                    r(&t.hits, 16),
+                    r(&t.stats, 8),
                     b(&t.totals),
                     wgpu::BindingResource::TextureView(&view),
                 ],
             );
             run(enc, &self.present, &present_bg, "present");
-            enc.copy_buffer_to_buffer(&t.totals, 0, &t.totals_read, 0, size_of::<FrameTotals>() as u64);
+            if first as u64 + count as u64 == n {
+                enc.copy_buffer_to_buffer(&t.totals, 0, &t.totals_read, 0, size_of::<FrameTotals>() as u64);
+            }
         }
         Ok(())
     }

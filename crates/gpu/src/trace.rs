@@ -80,6 +80,9 @@ pub struct TraceBuffers<'a> {
     pub rays: &'a wgpu::Buffer,
     pub hits: &'a wgpu::Buffer,
     pub stats: &'a wgpu::Buffer,
+    /// First ray of the dispatch in `rays` (and its hit and stats slots): the buffers are
+    /// bound from there, so the kernels index from 0. A multiple of [`tile_quantum`].
+    pub first: u32,
     /// Rays in the dispatch.
     pub count: u32,
     /// Traversal code ([`traversal_code`]); `params` carries the same in `options.x`.
@@ -115,9 +118,9 @@ impl Tracer {
         let pipe = self.pipeline(ctx, s.kind, b.traversal)?;
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: b.rays.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: b.hits.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 3, resource: b.stats.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: range(b.rays, b.first, b.count, 32) },
+            wgpu::BindGroupEntry { binding: 2, resource: range(b.hits, b.first, b.count, 16) },
+            wgpu::BindGroupEntry { binding: 3, resource: range(b.stats, b.first, b.count, 8) },
             wgpu::BindGroupEntry { binding: 4, resource: scene.triangles.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 5, resource: s.refs.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 6, resource: s.cells.as_entire_binding() },
@@ -189,6 +192,7 @@ impl Tracer {
                 rays: &rays_buf,
                 hits: &hits_buf,
                 stats: &stats_buf,
+                first: 0,
                 count,
                 traversal: code,
             };
@@ -203,6 +207,21 @@ impl Tracer {
         }
         Ok((hits, stats))
     }
+}
+
+/// Records `[first, first + count)` of a buffer of `stride`-byte records, as a binding.
+pub fn range(buffer: &wgpu::Buffer, first: u32, count: u32, stride: u64) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: first as u64 * stride,
+        size: std::num::NonZeroU64::new(count.max(1) as u64 * stride),
+    })
+}
+
+/// Ray ranges bound at an offset (tiles) must start at a multiple of this many rays: the
+/// storage-binding offset alignment for the smallest record (4-byte pixels), at least 64.
+pub fn tile_quantum(ctx: &GpuContext) -> u32 {
+    (ctx.device.limits().min_storage_buffer_offset_alignment / 4).max(64)
 }
 
 /// Maps `buffer` (MAP_READ) and copies `size` bytes out as `T`s.

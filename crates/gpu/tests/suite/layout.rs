@@ -36,7 +36,7 @@ fn rust_and_wgsl_structs_have_the_same_layout() {
     check!(trace, "Node", GpuNode, [res_first]);
     let render = naga::front::wgsl::parse_str(&compose("shade.wgsl").unwrap()).unwrap();
     check!(render, "Camera", GpuCamera, [eye, right, up, forward]);
-    check!(render, "ShadeParams", ShadeParams, [light, view, depth]);
+    check!(render, "ShadeParams", ShadeParams, [light, view, depth, tile]);
     // The ray and hit records are also the file formats.
     assert_eq!(size_of::<GpuRay>(), size_of::<gridrt_scene::Ray>());
     assert_eq!(size_of::<GpuHit>(), size_of::<gridrt_scene::Hit>());

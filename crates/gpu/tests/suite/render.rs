@@ -3,7 +3,7 @@
 
 use gridrt_gpu::cpu::{camera_rays, gpu_camera, present_totals, shade_pixel, shadow_ray};
 use gridrt_gpu::render::shade_params;
-use gridrt_gpu::trace::read_back;
+use gridrt_gpu::trace::{read_back, tile_quantum};
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_gpu::{FrameTarget, RenderOptions, Renderer, View};
 use gridrt_grid::trace::TraceOptions;
@@ -113,10 +113,30 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
             heat_max: 32.0,
         };
         let reference = renderer.render(ctx, &scene, &gs, &bounds, &opts).unwrap();
-        // Twice into the same target: buffers are reused, totals are cleared per frame.
-        for round in 0..2 {
+        // Twice into the same target as one tile (buffers are reused, totals are cleared per
+        // frame), then in tiles of an odd number of quanta, one submission each.
+        let q = tile_quantum(ctx);
+        for round in 0..3 {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
-            renderer.encode(ctx, &mut enc, &scene, &gs, &bounds, &opts, &target).unwrap();
+            if round < 2 {
+                renderer.encode(ctx, &mut enc, &scene, &gs, &bounds, &opts, &target).unwrap();
+            } else {
+                let n = w * h;
+                let mut first = 0;
+                while first < n {
+                    let count = (3 * q).min(n - first);
+                    renderer.encode_tile(ctx, &mut enc, &scene, &gs, &bounds, &opts, &target, first, count).unwrap();
+                    first += count;
+                    if first < n {
+                        ctx.queue.submit([enc.finish()]);
+                        enc = ctx.device.create_command_encoder(&Default::default());
+                    }
+                }
+                // A tile that does not start on a quantum is refused, not mis-rendered.
+                let mut e2 = ctx.device.create_command_encoder(&Default::default());
+                assert!(renderer.encode_tile(ctx, &mut e2, &scene, &gs, &bounds, &opts, &target, 1, 64).is_err());
+                assert!(renderer.encode_tile(ctx, &mut e2, &scene, &gs, &bounds, &opts, &target, 0, n + 1).is_err());
+            }
             let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("texture readback"),
                 size: (w * h * 4) as u64,
