@@ -155,7 +155,7 @@ impl GridrtApp {
             }
         }
         let (gpu, gpu_error) = match cc.wgpu_render_state.as_ref() {
-            Some(rs) => match Gpu::new(rs) {
+            Some(rs) => match Gpu::new(rs, &cc.egui_ctx) {
                 Ok(g) => (Some(g), None),
                 Err(e) => (None, Some(format!("GPU setup failed: {e}"))),
             },
@@ -350,16 +350,15 @@ impl GridrtApp {
             }
         };
         let opts = self.render_options(key.camera, key.size);
-        self.viewport.wait(gpu);
-        match self.viewport.submit(gpu, gs, &s, &scene.loaded.bounds, &opts) {
-            Ok(_) => {
-                self.viewport.wait(gpu);
-                if let Some(f) = self.viewport.last {
-                    let m = (res[0] as f64 * res[1] as f64 * res[2] as f64).cbrt();
-                    self.measurement.results.push((m, f.ms));
-                }
+        match self.viewport.render_blocking(gpu, gs, &s, &scene.loaded.bounds, &opts) {
+            Ok(ms) => {
+                let m = (res[0] as f64 * res[1] as f64 * res[2] as f64).cbrt();
+                self.measurement.results.push((m, ms));
             }
-            Err(e) => self.error = Some(e.to_string()),
+            Err(e) => {
+                self.viewport.cancel();
+                self.error = Some(e.to_string());
+            }
         }
         // The measured frame replaced the image: render the real structure again.
         self.last_key = None;
@@ -552,7 +551,6 @@ impl GridrtApp {
             );
         }
         let Some(gpu) = &self.gpu else { return };
-        self.viewport.poll(gpu);
         let (Some(scene), Some(b)) = (&self.scene, &self.built) else { return };
         let (Some(gs), Some(s)) = (&scene.gpu, &b.gpu) else { return };
         if b.built.scene_generation != scene.generation {
@@ -567,21 +565,18 @@ impl GridrtApp {
             size,
             structure: b.id,
         };
-        let smoke_wants_frames = self.smoke.as_ref().is_some_and(|s| self.viewport.frames_done < s.frames as u64);
-        if Some(key) != self.last_key || self.viewport.dirty || smoke_wants_frames {
-            self.viewport.dirty = true;
-            let opts = self.render_options(key.camera, size);
-            match self.viewport.submit(gpu, gs, s, &scene.loaded.bounds, &opts) {
-                Ok(true) => self.last_key = Some(key),
-                Ok(false) => {}
-                Err(e) => {
-                    self.viewport.dirty = false;
-                    self.last_key = Some(key);
-                    self.viewport.error = Some(e.to_string());
-                }
-            }
+        // Smoke mode renders its N frames back to back.
+        let smoke_wants_frame =
+            self.smoke.as_ref().is_some_and(|sm| self.viewport.frames_done < sm.frames as u64) && !self.viewport.busy();
+        if Some(key) != self.last_key || smoke_wants_frame {
+            self.viewport.start(&self.render_options(key.camera, size));
+            self.last_key = Some(key);
         }
-        if self.viewport.busy() || self.viewport.dirty {
+        if let Err(e) = self.viewport.step(gpu, gs, s, &scene.loaded.bounds) {
+            self.viewport.cancel();
+            self.viewport.error = Some(e.to_string());
+        }
+        if self.viewport.busy() {
             ui.ctx().request_repaint();
         }
     }

@@ -1,12 +1,14 @@
 //! The 3-D view: renders the scene through `gridrt-gpu` into a texture egui shows, on the
-//! device eframe created (shared, not a second device). One frame is in flight at a time; the
-//! UI keeps running while it is, and the frame's per-ray totals (cells, tests, hits) come back
-//! as 32 bytes through `present.wgsl`. A frame is rendered only when something changed.
+//! device eframe created (shared, not a second device). A frame is rendered only when something
+//! changed, in tiles of about [`TILE_MS`] each submitted on its own, so the UI keeps running
+//! while it renders; the frame's per-ray totals (cells, tests, hits) come back as 32 bytes
+//! through `present.wgsl`.
 
 use std::sync::{Arc, Mutex};
 
 use eframe::egui;
 use gridrt_gpu::layout::FrameTotals;
+use gridrt_gpu::trace::tile_quantum;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_gpu::{FrameTarget, GpuContext, GpuError, RenderOptions, Renderer, View};
 use gridrt_scene::Aabb;
@@ -17,6 +19,8 @@ pub struct Gpu {
     pub ctx: GpuContext,
     pub renderer: Renderer,
     pub egui: eframe::egui_wgpu::RenderState,
+    /// To wake the UI when GPU work completes.
+    pub ui: egui::Context,
 }
 
 impl std::fmt::Debug for Gpu {
@@ -26,10 +30,10 @@ impl std::fmt::Debug for Gpu {
 }
 
 impl Gpu {
-    pub fn new(rs: &eframe::egui_wgpu::RenderState) -> Result<Gpu, GpuError> {
+    pub fn new(rs: &eframe::egui_wgpu::RenderState, ui: &egui::Context) -> Result<Gpu, GpuError> {
         let ctx = GpuContext::from_parts(rs.adapter.clone(), rs.device.clone(), rs.queue.clone());
         let renderer = Renderer::new(&ctx)?;
-        Ok(Gpu { ctx, renderer, egui: rs.clone() })
+        Ok(Gpu { ctx, renderer, egui: rs.clone(), ui: ui.clone() })
     }
 }
 
@@ -38,7 +42,7 @@ impl Gpu {
 pub struct FrameStats {
     pub width: u32,
     pub height: u32,
-    /// Submit to completion, wall clock.
+    /// Sum over the frame's tiles of submit → completion, wall clock.
     pub ms: f64,
     pub totals: FrameTotals,
     pub view: View,
@@ -60,27 +64,97 @@ impl FrameStats {
     }
 }
 
-type Done = Arc<Mutex<Option<Result<(), String>>>>;
+/// Set when a tile (or the totals readback) is done: the completion time, or the error.
+type Done = Arc<Mutex<Option<Result<Instant, String>>>>;
 
+/// Tiles are sized to take about this long, so that the UI (whose own drawing queues behind
+/// them) and a browser's GPU watchdog never wait long.
+const TILE_MS: f64 = 60.0;
+/// GPU work submitted per UI wake-up.
+const STEP_MS: f64 = 150.0;
+
+/// A frame being rendered tile by tile.
 #[derive(Debug)]
 struct InFlight {
-    started: Instant,
-    done: Done,
-    view: View,
+    opts: RenderOptions,
+    /// Next pixel to render, and the frame's pixel count.
+    next: u32,
+    n: u32,
+    /// Sum of the finished tiles' times (submit → done).
+    gpu_ms: f64,
+    /// The tile on the GPU: its pixel count, submit time and completion flag.
+    tile: Option<(u32, Instant, Done)>,
+    /// Set once the last tile's totals readback completed.
+    totals: Option<Done>,
 }
 
 /// The render target, its egui texture and the frame in flight.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Viewport {
+    /// The target frames render into; egui shows the last completed one's texture.
     target: Option<FrameTarget>,
     texture: Option<egui::TextureId>,
+    /// Size of the texture egui shows.
+    shown: Option<(u32, u32)>,
     in_flight: Option<InFlight>,
-    /// Something changed since the last submitted frame.
-    pub dirty: bool,
+    /// A frame asked for while another was in flight: it starts after the current tile.
+    restart: Option<RenderOptions>,
+    /// Pixels per millisecond of the last tile: sizes the next one.
+    rate: f64,
+    /// Natively, a thread waits for each submitted tile, so that its completion time is exact
+    /// and the UI wakes at once (the browser runs the callbacks on its own).
+    #[cfg(not(target_arch = "wasm32"))]
+    waiter: Option<std::sync::mpsc::Sender<(wgpu::SubmissionIndex, Done)>>,
     pub last: Option<FrameStats>,
     /// Frames completed since start.
     pub frames_done: u64,
     pub error: Option<String>,
+}
+
+impl Default for Viewport {
+    fn default() -> Self {
+        Viewport {
+            target: None,
+            texture: None,
+            shown: None,
+            in_flight: None,
+            restart: None,
+            rate: 1000.0,
+            #[cfg(not(target_arch = "wasm32"))]
+            waiter: None,
+            last: None,
+            frames_done: 0,
+            error: None,
+        }
+    }
+}
+
+/// The thread that waits for submitted tiles (native): it blocks on each submission, marks
+/// it done with the time, and wakes the UI.
+#[cfg(not(target_arch = "wasm32"))]
+fn spawn_waiter(gpu: &Gpu) -> std::sync::mpsc::Sender<(wgpu::SubmissionIndex, Done)> {
+    let (tx, rx) = std::sync::mpsc::channel::<(wgpu::SubmissionIndex, Done)>();
+    let device = gpu.ctx.device.clone();
+    let ui = gpu.ui.clone();
+    std::thread::Builder::new()
+        .name("gridrt tile waiter".into())
+        .spawn(move || {
+            for (index, done) in rx {
+                let r = device
+                    .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
+                    .map(|_| Instant::now())
+                    .map_err(|e| e.to_string());
+                *done.lock().expect("tile lock") = Some(r);
+                ui.request_repaint();
+            }
+        })
+        .expect("spawning the tile waiter");
+    tx
+}
+
+fn flag() -> (Done, Done) {
+    let d: Done = Arc::new(Mutex::new(None));
+    (d.clone(), d)
 }
 
 impl Viewport {
@@ -89,86 +163,164 @@ impl Viewport {
         if self.frames_done > 0 { self.texture } else { None }
     }
 
+    /// A frame is being rendered or waits to start.
     pub fn busy(&self) -> bool {
-        self.in_flight.is_some()
+        self.in_flight.is_some() || self.restart.is_some()
     }
 
-    /// Makes the target `w`×`h`, re-registering the texture with egui when it changes.
-    fn ensure_target(&mut self, gpu: &Gpu, w: u32, h: u32) -> Result<(), GpuError> {
-        if self.target.as_ref().is_some_and(|t| (t.width, t.height) == (w, h)) {
-            return Ok(());
+    /// Asks for a frame. One in flight is abandoned after its current tile (the camera or a
+    /// setting changed, so its remaining tiles would be stale) unless it is about to finish.
+    pub fn start(&mut self, opts: &RenderOptions) {
+        self.restart = Some(*opts);
+    }
+
+    /// Drops the frame in flight (after an error).
+    pub fn cancel(&mut self) {
+        self.in_flight = None;
+        self.restart = None;
+    }
+
+    /// Shows the target's texture in egui (after its first complete frame at this size).
+    fn show_target(&mut self, gpu: &Gpu) {
+        let Some(t) = &self.target else { return };
+        if self.shown == Some((t.width, t.height)) && self.texture.is_some() {
+            return;
         }
-        let target = FrameTarget::new(&gpu.ctx, w, h, true)?;
-        let view = target.display_view().expect("display target has a texture");
+        let view = t.display_view().expect("display target has a texture");
         let mut r = gpu.egui.renderer.write();
         match self.texture {
             Some(id) => r.update_egui_texture_from_wgpu_texture(&gpu.ctx.device, &view, wgpu::FilterMode::Linear, id),
             None => self.texture = Some(r.register_native_texture(&gpu.ctx.device, &view, wgpu::FilterMode::Linear)),
         }
-        self.target = Some(target);
-        Ok(())
+        self.shown = Some((t.width, t.height));
     }
 
-    /// Collects a finished frame, if any. Returns true when one finished.
-    pub fn poll(&mut self, gpu: &Gpu) -> bool {
-        let Some(f) = &self.in_flight else { return false };
+    /// Advances rendering: collects a finished tile, finishes the frame, starts a requested
+    /// one, submits the next tile. Returns true when a frame completed.
+    pub fn step(&mut self, gpu: &Gpu, scene: &GpuScene, s: &GpuStructure, bounds: &Aabb) -> Result<bool, GpuError> {
         #[cfg(not(target_arch = "wasm32"))]
         let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
-        let Some(result) = f.done.lock().expect("frame lock").take() else { return false };
-        let f = self.in_flight.take().expect("in flight");
-        let target = self.target.as_ref().expect("a frame in flight has a target");
-        match result.and_then(|()| target.take_totals().map_err(|e| e.to_string())) {
-            Ok(totals) => {
+        let mut completed = false;
+        if let Some(f) = &mut self.in_flight {
+            if let Some((count, started, done)) = &f.tile {
+                let Some(result) = done.lock().expect("tile lock").take() else { return Ok(false) };
+                let finished = result.map_err(|e| GpuError::Readback { what: "frame tile", detail: e })?;
+                let ms = finished.duration_since(*started).as_secs_f64() * 1e3;
+                self.rate = *count as f64 / ms.max(0.1);
+                f.gpu_ms += ms;
+                f.tile = None;
+            }
+            if let Some(totals) = &f.totals {
+                let Some(result) = totals.lock().expect("totals lock").take() else { return Ok(false) };
+                result.map_err(|e| GpuError::Readback { what: "frame totals", detail: e })?;
+                let f = self.in_flight.take().expect("in flight");
+                let target = self.target.as_ref().expect("target");
                 self.last = Some(FrameStats {
                     width: target.width,
                     height: target.height,
-                    ms: f.started.elapsed().as_secs_f64() * 1e3,
-                    totals,
-                    view: f.view,
+                    ms: f.gpu_ms,
+                    totals: target.take_totals()?,
+                    view: f.opts.view,
                 });
                 self.frames_done += 1;
                 self.error = None;
+                completed = true;
+                self.show_target(gpu);
             }
-            Err(e) => self.error = Some(format!("frame failed: {e}")),
         }
-        true
+        if let Some(opts) = self.restart.take() {
+            // Nothing of ours is on the GPU now: the target may be replaced.
+            if self.target.as_ref().is_none_or(|t| (t.width, t.height) != (opts.width, opts.height)) {
+                self.target = Some(FrameTarget::new(&gpu.ctx, opts.width, opts.height, true)?);
+            }
+            let n = opts.width * opts.height;
+            self.in_flight = Some(InFlight { opts, next: 0, n, gpu_ms: 0.0, tile: None, totals: None });
+        }
+        let Some(f) = &mut self.in_flight else { return Ok(completed) };
+        if f.next >= f.n {
+            // Cut short (render_blocking stops after the tile on the GPU).
+            self.in_flight = None;
+            return Ok(completed);
+        }
+        let target = self.target.as_ref().expect("target");
+        let q = tile_quantum(&gpu.ctx);
+        // Tiles of ~TILE_MS, at most ~128 a frame; several per UI wake-up, up to STEP_MS of
+        // work, since each wake-up repaints the UI (costly on a software adapter).
+        let floor = (f.n / 128).max(q) as f64;
+        let tile = ((self.rate * TILE_MS).clamp(floor, f.n as f64) as u32 / q * q).max(q);
+        let budget = (self.rate * STEP_MS).max(tile as f64) as u64;
+        let started = Instant::now();
+        let mut count = 0u32;
+        let mut index = None;
+        while f.next < f.n && (count as u64) < budget {
+            let c = tile.min(f.n - f.next);
+            let mut enc =
+                gpu.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("app tile") });
+            gpu.renderer.encode_tile(&gpu.ctx, &mut enc, scene, s, bounds, &f.opts, target, f.next, c)?;
+            // Each tile's uniforms are written before its own submission, so back-to-back
+            // submissions see their own values (queue writes are ordered with submissions).
+            index = Some(gpu.ctx.queue.submit([enc.finish()]));
+            f.next += c;
+            count += c;
+        }
+        let index = index.expect("at least one tile");
+        let (done, d) = flag();
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let waiter = self.waiter.get_or_insert_with(|| spawn_waiter(gpu));
+            let _ = waiter.send((index, d));
+        }
+        #[cfg(target_arch = "wasm32")]
+        {
+            let _ = index;
+            gpu.ctx.queue.on_submitted_work_done(move || *d.lock().expect("tile lock") = Some(Ok(Instant::now())));
+        }
+        f.tile = Some((count, started, done));
+        if f.next == f.n {
+            let (totals, t) = flag();
+            target.totals_read.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+                *t.lock().expect("totals lock") = Some(r.map(|()| Instant::now()).map_err(|e| e.to_string()));
+            });
+            f.totals = Some(totals);
+        }
+        Ok(completed)
     }
 
-    /// Submits a frame if none is in flight. `opts.width/height` set the target size.
-    pub fn submit(
+    /// Renders a whole frame, blocking until it is done (the cost-model measurement times
+    /// frames). Returns its milliseconds, wall clock.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn render_blocking(
         &mut self,
         gpu: &Gpu,
         scene: &GpuScene,
         s: &GpuStructure,
         bounds: &Aabb,
         opts: &RenderOptions,
-    ) -> Result<bool, GpuError> {
-        if self.in_flight.is_some() {
-            return Ok(false);
-        }
-        self.ensure_target(gpu, opts.width, opts.height)?;
-        let target = self.target.as_ref().expect("target");
-        let mut enc =
-            gpu.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("app frame") });
-        gpu.renderer.encode(&gpu.ctx, &mut enc, scene, s, bounds, opts, target)?;
-        let started = Instant::now();
-        gpu.ctx.queue.submit([enc.finish()]);
-        let done: Done = Arc::new(Mutex::new(None));
-        let d = done.clone();
-        target.totals_read.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-            *d.lock().expect("frame lock") = Some(r.map_err(|e| e.to_string()));
-        });
-        self.in_flight = Some(InFlight { started, done, view: opts.view });
-        self.dirty = false;
-        Ok(true)
-    }
-
-    /// Blocks until the frame in flight is done (the cost-model measurement times frames).
-    #[cfg(not(target_arch = "wasm32"))]
-    pub fn wait(&mut self, gpu: &Gpu) {
-        if self.in_flight.is_some() {
+    ) -> Result<f64, GpuError> {
+        // Finish (or abandon) what is in flight first.
+        self.restart = None;
+        while self.in_flight.is_some() {
+            if let Some(f) = &mut self.in_flight
+                && f.tile.is_none()
+                && f.totals.is_none()
+            {
+                self.in_flight = None;
+                break;
+            }
             let _ = gpu.ctx.device.poll(wgpu::PollType::wait_indefinitely());
-            self.poll(gpu);
+            if let Some(f) = &mut self.in_flight {
+                // Stop after the tile on the GPU: do not submit the rest.
+                f.n = f.next;
+            }
+            self.step(gpu, scene, s, bounds)?;
+        }
+        self.start(opts);
+        let started = Instant::now();
+        loop {
+            if self.step(gpu, scene, s, bounds)? {
+                return Ok(started.elapsed().as_secs_f64() * 1e3);
+            }
+            let _ = gpu.ctx.device.poll(wgpu::PollType::wait_indefinitely());
         }
     }
 }
