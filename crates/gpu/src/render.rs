@@ -274,7 +274,7 @@ impl Renderer {
             )));
         }
         let n = t.pixel_count();
-        if count == 0 || first as u64 + count as u64 > n || first % tile_quantum(ctx) != 0 {
+        if count == 0 || first as u64 + count as u64 > n || !first.is_multiple_of(tile_quantum(ctx)) {
             return Err(GpuError::Unsupported(format!(
                 "tile of {count} pixels at {first} in a frame of {n} (tiles start at multiples of {})",
                 tile_quantum(ctx)
