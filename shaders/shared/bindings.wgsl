@@ -1,10 +1,6 @@
 //!include shared/types.wgsl
 // The trace kernels' bindings (group 0, bindings 0-5; 6-7 are the structure's own).
 
-// The walker (0 Amanatides-Woo, 1 Cleary-Wyvill, 2 Liu), fixed per pipeline so the compiler
-// drops the other walkers' code (params.options.x carries the same value for reference).
-override TRAVERSAL: u32 = 0u;
-
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> rays: array<Ray>;
 @group(0) @binding(2) var<storage, read_write> hits: array<Hit>;

@@ -1,7 +1,7 @@
 //!include shared/bindings.wgsl
 //!include shared/ray.wgsl
 //!include shared/triangle.wgsl
-//!include shared/walker.wgsl
+//!include shared/walker_{TRAVERSAL}.wgsl
 // What every trace kernel does around its structure walk: read the ray, prepare it, place it
 // in the grid, write hit and stats.
 

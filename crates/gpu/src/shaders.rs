@@ -1,6 +1,8 @@
 //! The WGSL sources, embedded at compile time (`include_str!`) so binaries and the wasm build
 //! carry them, and their composition: a line `//!include shared/x.wgsl` is replaced by that
-//! file (itself composed), each file at most once per module.
+//! file (itself composed), each file at most once per module. In an include path,
+//! `{TRAVERSAL}` stands for the walker the module is composed with (`aw`, `cw` or `liu`): each
+//! trace pipeline carries only its own walker's code and state.
 
 /// Every WGSL file under `shaders/`, by its path relative to that folder.
 pub const SOURCES: &[(&str, &str)] = &[
@@ -17,7 +19,10 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/bindings.wgsl", include_str!("../../../shaders/shared/bindings.wgsl")),
     ("shared/ray.wgsl", include_str!("../../../shaders/shared/ray.wgsl")),
     ("shared/triangle.wgsl", include_str!("../../../shaders/shared/triangle.wgsl")),
-    ("shared/walker.wgsl", include_str!("../../../shaders/shared/walker.wgsl")),
+    ("shared/walker_common.wgsl", include_str!("../../../shaders/shared/walker_common.wgsl")),
+    ("shared/walker_aw.wgsl", include_str!("../../../shaders/shared/walker_aw.wgsl")),
+    ("shared/walker_cw.wgsl", include_str!("../../../shaders/shared/walker_cw.wgsl")),
+    ("shared/walker_liu.wgsl", include_str!("../../../shaders/shared/walker_liu.wgsl")),
     ("shared/trace_common.wgsl", include_str!("../../../shaders/shared/trace_common.wgsl")),
     ("shared/hierarchy.wgsl", include_str!("../../../shaders/shared/hierarchy.wgsl")),
     ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
@@ -35,15 +40,26 @@ pub fn source(name: &str) -> Option<&'static str> {
     SOURCES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
 }
 
-/// The composed module for `name` (e.g. `"flat.wgsl"`).
+/// The walker variants `{TRAVERSAL}` can stand for.
+pub const WALKERS: [&str; 3] = ["aw", "cw", "liu"];
+
+/// The composed module for `name` (e.g. `"flat.wgsl"`) with the Amanatides–Woo walker.
 pub fn compose(name: &str) -> Result<String, ComposeError> {
+    compose_with(name, "aw")
+}
+
+/// The composed module for `name` with the walker `walker` (one of [`WALKERS`]).
+pub fn compose_with(name: &str, walker: &str) -> Result<String, ComposeError> {
+    if !WALKERS.contains(&walker) {
+        return Err(ComposeError { file: name.into(), detail: format!("unknown walker \"{walker}\"") });
+    }
     let mut out = String::new();
     let mut seen = Vec::new();
-    compose_into(name, &mut out, &mut seen)?;
+    compose_into(name, walker, &mut out, &mut seen)?;
     Ok(out)
 }
 
-fn compose_into(name: &str, out: &mut String, seen: &mut Vec<String>) -> Result<(), ComposeError> {
+fn compose_into(name: &str, walker: &str, out: &mut String, seen: &mut Vec<String>) -> Result<(), ComposeError> {
     if seen.iter().any(|s| s == name) {
         return Ok(());
     }
@@ -51,8 +67,9 @@ fn compose_into(name: &str, out: &mut String, seen: &mut Vec<String>) -> Result<
     let src = source(name).ok_or_else(|| ComposeError { file: name.into(), detail: "no such shader".into() })?;
     for line in src.lines() {
         if let Some(inc) = line.trim().strip_prefix("//!include ") {
-            compose_into(inc.trim(), out, seen)
-                .map_err(|e| ComposeError { file: name.into(), detail: format!("including {}: {}", inc.trim(), e) })?;
+            let inc = inc.trim().replace("{TRAVERSAL}", walker);
+            compose_into(&inc, walker, out, seen)
+                .map_err(|e| ComposeError { file: name.into(), detail: format!("including {inc}: {e}") })?;
         } else {
             out.push_str(line);
             out.push('\n');

@@ -11,7 +11,7 @@ use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
 use crate::layout::{GpuHit, GpuRay, GpuRayStats, GridParams};
-use crate::shaders::compose;
+use crate::shaders::compose_with;
 use crate::upload::{GpuScene, GpuStructure};
 
 /// Threads per workgroup of every kernel (`@workgroup_size(64)`).
@@ -42,17 +42,17 @@ pub fn traversal_code(t: Traversal) -> Result<u32, GpuError> {
 
 /// Creates a compute pipeline for `entry` in the composed shader `file` (auto layout).
 pub(crate) fn pipeline(ctx: &GpuContext, file: &str, entry: &str) -> Result<wgpu::ComputePipeline, GpuError> {
-    pipeline_with(ctx, file, entry, &[])
+    pipeline_walking(ctx, file, entry, "aw")
 }
 
-/// [`pipeline`] with values for the shader's `override` constants.
-pub(crate) fn pipeline_with(
+/// [`pipeline`] composed with the walker `walker` (`aw`, `cw` or `liu`).
+pub(crate) fn pipeline_walking(
     ctx: &GpuContext,
     file: &str,
     entry: &str,
-    constants: &[(&str, f64)],
+    walker: &str,
 ) -> Result<wgpu::ComputePipeline, GpuError> {
-    let src = compose(file)?;
+    let src = compose_with(file, walker)?;
     let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(file),
         source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -62,7 +62,7 @@ pub(crate) fn pipeline_with(
         layout: None,
         module: &module,
         entry_point: Some(entry),
-        compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
+        compilation_options: Default::default(),
         cache: None,
     }))
 }
@@ -101,7 +101,7 @@ impl Tracer {
             return Ok(p.clone());
         }
         let (file, entry) = kernel(kind);
-        let p = pipeline_with(ctx, file, entry, &[("TRAVERSAL", code as f64)])?;
+        let p = pipeline_walking(ctx, file, entry, crate::shaders::WALKERS[code as usize])?;
         map.insert((kind, code), p.clone());
         Ok(p)
     }

@@ -1,6 +1,6 @@
 //! Every .wgsl under shaders/ composes, parses and validates with naga (all validation flags).
 
-use gridrt_gpu::shaders::{SOURCES, compose};
+use gridrt_gpu::shaders::{SOURCES, WALKERS, compose_with};
 
 #[test]
 fn every_wgsl_file_composes_parses_and_validates() {
@@ -23,14 +23,16 @@ fn every_wgsl_file_composes_parses_and_validates() {
     embedded.sort();
     assert_eq!(on_disk, embedded, "shaders/ and the embedded list in crates/gpu/src/shaders.rs differ");
     let mut failures = Vec::new();
-    for name in &on_disk {
-        let src = match compose(name) {
+    // Every file with every walker a trace kernel can be composed with.
+    for (name, walker) in on_disk.iter().flat_map(|n| WALKERS.map(|w| (n, w))) {
+        let src = match compose_with(name, walker) {
             Ok(s) => s,
             Err(e) => {
-                failures.push(format!("{name}: {e}"));
+                failures.push(format!("{name} ({walker}): {e}"));
                 continue;
             }
         };
+        let name = &format!("{name} (walker {walker})");
         let module = match naga::front::wgsl::parse_str(&src) {
             Ok(m) => m,
             Err(e) => {
@@ -45,5 +47,5 @@ fn every_wgsl_file_composes_parses_and_validates() {
         }
     }
     assert!(failures.is_empty(), "{} of {} shaders failed:\n{}", failures.len(), on_disk.len(), failures.join("\n\n"));
-    println!("{} shaders validated", on_disk.len());
+    println!("{} shaders validated with each of {} walkers", on_disk.len(), WALKERS.len());
 }

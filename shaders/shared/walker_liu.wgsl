@@ -1,0 +1,191 @@
+//!include shared/walker_common.wgsl
+// Liu's integer one-pass walker: slice by slice along the dominant axis in 20-bit fixed point,
+// the cells of each slice queued in order (exact 64-bit wall comparisons).
+// CPU port (same names, same arithmetic): crates/grid/src/traversal/liu.rs.
+
+const TRAVERSAL: u32 = WALK_LIU;
+const LIU_FRAC_BITS: u32 = 20u;
+const LIU_ONE: f32 = 1048576.0;
+const LIU_QUEUE: u32 = 8u;
+
+struct Walker {
+    done: bool,
+    g: GridRay,
+    res: vec3<i32>,
+    cell: vec3<i32>,
+    step: vec3<i32>,
+    u: u32,
+    v: u32,
+    w: u32,
+    slices_left: i32,
+    k: vec2<i32>,
+    end: vec2<i32>,
+    last: vec2<i32>,
+    queue: array<vec3<i32>, 8>,
+    queued: u32,
+    emitted: u32,
+    // Output of walker_next.
+    out_cell: vec3<i32>,
+    out_t_exit: f32,
+}
+
+fn liu_fix(x: f32, hi: i32) -> i32 {
+    return i32(floor(clamp(x, -1.0, f32(hi) + 1.0) * LIU_ONE + 0.5));
+}
+
+fn liu_fix_slope(k: f32) -> i32 {
+    return i32(floor(clamp(k, -1.0, 1.0) * LIU_ONE + 0.5));
+}
+
+fn liu_cell_of(x: i32, s: i32) -> i32 {
+    if s >= 0 {
+        return x >> LIU_FRAC_BITS;
+    }
+    return -((-x) >> LIU_FRAC_BITS) - 1;
+}
+
+// Full 32x32 -> 64-bit product as (hi, lo).
+fn mul_wide(a: u32, b: u32) -> vec2<u32> {
+    let a0 = a & 0xffffu;
+    let a1 = a >> 16u;
+    let b0 = b & 0xffffu;
+    let b1 = b >> 16u;
+    let p00 = a0 * b0;
+    let p01 = a0 * b1;
+    let p10 = a1 * b0;
+    let p11 = a1 * b1;
+    let mid = (p00 >> 16u) + (p01 & 0xffffu) + (p10 & 0xffffu);
+    let lo = (p00 & 0xffffu) | (mid << 16u);
+    let hi = p11 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u);
+    return vec2<u32>(hi, lo);
+}
+
+fn wide_ge(x: vec2<u32>, y: vec2<u32>) -> bool {
+    return x.x > y.x || (x.x == y.x && x.y >= y.y);
+}
+
+fn liu_target(x: i32, s: i32, c: i32, hi: i32) -> i32 {
+    if s == 0 {
+        return c;
+    }
+    let t = clamp(liu_cell_of(x, s), 0, hi - 1);
+    if (t - c) * s < 0 {
+        return c;
+    }
+    return t;
+}
+
+fn liu_fill_slice(w: ptr<function, Walker>) {
+    let v = (*w).v;
+    let ww = (*w).w;
+    (*w).queue[0] = (*w).cell;
+    (*w).queued = 1u;
+    (*w).emitted = 0u;
+    let sv = (*w).step[v];
+    let sw = (*w).step[ww];
+    let tv = liu_target((*w).end.x, sv, (*w).cell[v], (*w).res[v]);
+    let tw = liu_target((*w).end.y, sw, (*w).cell[ww], (*w).res[ww]);
+    loop {
+        if !(((*w).cell[v] != tv || (*w).cell[ww] != tw) && (*w).queued < LIU_QUEUE) {
+            break;
+        }
+        var move_v = false;
+        if (*w).cell[v] == tv {
+            move_v = false;
+        } else if (*w).cell[ww] == tw {
+            move_v = true;
+        } else {
+            let wall_v = ((*w).cell[v] + select(0, 1, sv > 0)) << LIU_FRAC_BITS;
+            let wall_w = ((*w).cell[ww] + select(0, 1, sw > 0)) << LIU_FRAC_BITS;
+            let ev = u32(abs((*w).end.x - wall_v));
+            let ew = u32(abs((*w).end.y - wall_w));
+            move_v = wide_ge(mul_wide(ev, u32(abs((*w).k.y))), mul_wide(ew, u32(abs((*w).k.x))));
+        }
+        if move_v {
+            (*w).cell[v] += sv;
+        } else {
+            (*w).cell[ww] += sw;
+        }
+        (*w).queue[(*w).queued] = (*w).cell;
+        (*w).queued += 1u;
+    }
+}
+
+fn liu_next_slice(w: ptr<function, Walker>) -> bool {
+    if (*w).slices_left == 0 {
+        return false;
+    }
+    (*w).slices_left -= 1;
+    let u = (*w).u;
+    (*w).cell[u] += (*w).step[u];
+    if (*w).cell[u] < 0 || (*w).cell[u] >= (*w).res[u] {
+        return false;
+    }
+    if (*w).slices_left == 0 {
+        (*w).end = (*w).last;
+    } else {
+        (*w).end += (*w).k;
+    }
+    liu_fill_slice(w);
+    return true;
+}
+
+fn walker_init(kind: u32, g: GridRay, res_u: vec3<u32>) -> Walker {
+    var w: Walker;
+    w.done = false;
+    w.g = g;
+    w.res = vec3<i32>(res_u);
+    let c = cell_at(g, g.t0, res_u);
+    w.cell = c;
+    for (var a = 0u; a < 3u; a++) {
+        w.step[a] = sign_step(g.d[a]);
+    }
+    let u = argmax3(abs(g.d));
+    let v = (u + 1u) % 3u;
+    let ww = (u + 2u) % 3u;
+    w.u = u;
+    w.v = v;
+    w.w = ww;
+    let end_cell = cell_at(g, g.t1, res_u);
+    let p0 = g.o + g.d * g.t0;
+    let p1 = g.o + g.d * g.t1;
+    var su = w.step[u];
+    if su == 0 {
+        su = 1;
+    }
+    w.step[u] = su;
+    w.slices_left = max((end_cell[u] - c[u]) * su, 0);
+    var kv = 0.0;
+    var kw = 0.0;
+    if g.d[u] != 0.0 {
+        kv = g.d[v] * g.inv_d[u];
+        kw = g.d[ww] * g.inv_d[u];
+    }
+    w.k = vec2<i32>(liu_fix_slope(kv * f32(su)), liu_fix_slope(kw * f32(su)));
+    w.last = vec2<i32>(liu_fix(p1[v], w.res[v]), liu_fix(p1[ww], w.res[ww]));
+    if w.slices_left == 0 {
+        w.end = w.last;
+    } else {
+        let wall = f32(select(c[u], c[u] + 1, su > 0));
+        let du = wall - p0[u];
+        w.end = vec2<i32>(liu_fix(p0[v] + du * kv, w.res[v]), liu_fix(p0[ww] + du * kw, w.res[ww]));
+    }
+    liu_fill_slice(&w);
+    return w;
+}
+
+// Advances to the next cell: sets out_cell / out_t_exit and returns true, or false when done.
+fn walker_next(w: ptr<function, Walker>) -> bool {
+    if (*w).done {
+        return false;
+    }
+    if (*w).emitted == (*w).queued && !liu_next_slice(w) {
+        (*w).done = true;
+        return false;
+    }
+    let c = (*w).queue[(*w).emitted];
+    (*w).emitted += 1u;
+    (*w).out_cell = c;
+    (*w).out_t_exit = exit_of_cell((*w).g, c);
+    return true;
+}
