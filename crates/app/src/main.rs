@@ -1,13 +1,16 @@
 //! `gridrt`: without a subcommand it opens the desktop app (egui on wgpu); the subcommands
 //! expose each stage of the pipeline from the command line: scene → grid → trace → hits.
+//! Built for wasm32, the same app runs in a browser on WebGPU (`gui::start_web`).
 
 mod cli;
+#[cfg(not(target_arch = "wasm32"))]
 mod commands;
+mod format;
 mod gui;
 
-use clap::Parser;
-
+#[cfg(not(target_arch = "wasm32"))]
 fn main() -> anyhow::Result<()> {
+    use clap::Parser;
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = cli::Cli::parse();
     if let Some(n) = cli.threads {
@@ -24,4 +27,10 @@ fn main() -> anyhow::Result<()> {
         Some(cli::Command::Render(a)) => commands::render::run(a),
         Some(cli::Command::BenchTrace(a)) => commands::bench_trace::run(a),
     }
+}
+
+/// In a browser the page's script calls the wasm module's start; `main` only starts the app.
+#[cfg(target_arch = "wasm32")]
+fn main() {
+    gui::start_web();
 }

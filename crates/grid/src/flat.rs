@@ -6,7 +6,8 @@
 //! counts and scatters with atomics, then sorts each cell's references, so that its output is
 //! bit-identical to the serial build's.
 
-use std::time::Instant;
+// std::time::Instant panics on wasm32-unknown-unknown; web-time is std's Instant elsewhere.
+use web_time::Instant;
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

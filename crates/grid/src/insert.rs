@@ -136,22 +136,22 @@ pub fn bucket(
     let cells = geom.cell_count() as usize;
     let n = ids.map_or(tris.len(), |v| v.len());
     let id = |k: usize| ids.map_or(k as u32, |v| v[k]);
-    let mut record = |name: &str, start: std::time::Instant| {
+    let mut record = |name: &str, start: web_time::Instant| {
         if let Some(t) = times.as_deref_mut() {
             t.0.push((name.to_string(), start.elapsed().as_secs_f64() * 1e3));
         }
     };
-    let start = std::time::Instant::now();
+    let start = web_time::Instant::now();
     let mut counts = vec![0u32; cells];
     for k in 0..n {
         let g = prepare(geom, &tris[id(k) as usize], margin);
         for_each_cell(geom, &g, mode, |c| counts[c] += 1);
     }
     record("count", start);
-    let start = std::time::Instant::now();
+    let start = web_time::Instant::now();
     let cell_start = crate::flat::prefix_sum(counts.iter().copied(), cells)?;
     record("scan", start);
-    let start = std::time::Instant::now();
+    let start = web_time::Instant::now();
     let mut cursor = counts;
     cursor.copy_from_slice(&cell_start[..cells]);
     let mut refs = vec![0u32; cell_start[cells] as usize];

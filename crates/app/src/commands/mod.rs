@@ -32,17 +32,7 @@ pub fn build_grid(tris: &[[Vec3; 3]], args: &GridArgs) -> anyhow::Result<(AnyGri
     structure::build(tris, &cfg).with_context(|| format!("building the {} grid", cfg.kind))
 }
 
-/// "12.3 MiB" style.
-pub fn human_bytes(b: u64) -> String {
-    let b = b as f64;
-    if b >= 1024.0 * 1024.0 {
-        format!("{:.1} MiB", b / (1024.0 * 1024.0))
-    } else if b >= 1024.0 {
-        format!("{:.1} KiB", b / 1024.0)
-    } else {
-        format!("{b} B")
-    }
-}
+pub use crate::format::human_bytes;
 
 /// The GPU device, with its adapter reported on stderr.
 pub fn gpu_context() -> anyhow::Result<gridrt_gpu::GpuContext> {

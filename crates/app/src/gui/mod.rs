@@ -101,6 +101,9 @@ pub struct GridrtApp {
     factor_frame: u64,
     /// `--measure`: start the cost-model measurement when a structure with a cost curve is up.
     measure_at_start: bool,
+    /// A file dropped in the browser, while its bytes are read.
+    #[cfg(target_arch = "wasm32")]
+    dropped: Option<std::sync::mpsc::Receiver<Result<(String, Vec<u8>), String>>>,
 }
 
 /// While the camera moves, frames slower than this are rendered at a lower resolution; the
@@ -184,6 +187,8 @@ impl GridrtApp {
             interactive_factor: 1.0,
             factor_frame: 0,
             measure_at_start: args.measure,
+            #[cfg(target_arch = "wasm32")]
+            dropped: None,
         };
         let source = args.scene.map_or(SceneSource::Default, SceneSource::Path);
         app.open(&cc.egui_ctx, source);
@@ -641,6 +646,32 @@ impl GridrtApp {
             self.open(ctx, SceneSource::Path(f.path().to_path_buf()));
         }
     }
+
+    /// In the browser a dropped file's bytes arrive asynchronously; the load starts when they
+    /// are here.
+    #[cfg(target_arch = "wasm32")]
+    fn dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        if let Some(f) = dropped.into_iter().next() {
+            let (tx, rx) = std::sync::mpsc::channel();
+            let name = f.path().to_string_lossy().into_owned();
+            let ui = ctx.clone();
+            wasm_bindgen_futures::spawn_local(async move {
+                let _ = tx.send(f.bytes_async().await.map(|b| (name, b)));
+                ui.request_repaint();
+            });
+            self.dropped = Some(rx);
+        }
+        if let Some(rx) = &self.dropped
+            && let Ok(r) = rx.try_recv()
+        {
+            self.dropped = None;
+            match r {
+                Ok((name, bytes)) => self.open(ctx, SceneSource::Bytes { name, bytes: bytes.into() }),
+                Err(e) => self.error = Some(format!("reading the dropped file: {e}")),
+            }
+        }
+    }
 }
 
 impl eframe::App for GridrtApp {
@@ -785,4 +816,37 @@ pub fn run_native(args: AppArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// Starts the app in a browser, on the canvas with id `gridrt_canvas` (web/index.html). A
+/// failure (no WebGPU, no adapter) replaces the page's loading text with the reason.
+#[cfg(target_arch = "wasm32")]
+pub fn start_web() {
+    use eframe::wasm_bindgen::JsCast as _;
+    eframe::WebLogger::init(log::LevelFilter::Info).ok();
+    let options = eframe::WebOptions { wgpu_options: wgpu_options(), ..Default::default() };
+    wasm_bindgen_futures::spawn_local(async move {
+        let document = eframe::web_sys::window().and_then(|w| w.document()).expect("a browser document");
+        let canvas = document
+            .get_element_by_id("gridrt_canvas")
+            .expect("web/index.html has a canvas with id gridrt_canvas")
+            .dyn_into::<eframe::web_sys::HtmlCanvasElement>()
+            .expect("gridrt_canvas is a canvas");
+        let status: SmokeStatus = Default::default();
+        let result = eframe::WebRunner::new()
+            .start(
+                canvas,
+                options,
+                Box::new(
+                    move |cc| Ok(Box::new(GridrtApp::new(cc, AppArgs::default(), status)) as Box<dyn eframe::App>),
+                ),
+            )
+            .await;
+        if let Some(el) = document.get_element_by_id("loading_text") {
+            match result {
+                Ok(()) => el.remove(),
+                Err(e) => el.set_inner_html(&format!("<p>gridrt could not start: {e:?}</p>")),
+            }
+        }
+    });
 }

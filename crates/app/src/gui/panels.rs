@@ -10,7 +10,7 @@ use gridrt_grid::{GridKind, InsertMode, Resolution, Traversal};
 use super::jobs::Built;
 use super::settings::Settings;
 use super::viewport::FrameStats;
-use crate::commands::human_bytes;
+use crate::format::human_bytes;
 
 fn kind_blurb(kind: GridKind) -> &'static str {
     match kind {

@@ -41,3 +41,25 @@ impl Default for Settings {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gridrt_grid::{GridKind, Resolution};
+
+    #[test]
+    fn settings_survive_a_round_trip_and_old_files_fill_in_defaults() {
+        let mut s = Settings::default();
+        s.grid.kind = GridKind::Multires;
+        s.grid.resolution = Some(Resolution::Cubic(40));
+        s.traversal = Traversal::Liu;
+        s.view = "heatmap-tests".into();
+        s.explainer.nx = 20;
+        let text = serde_json::to_string(&s).unwrap();
+        let back: Settings = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, s);
+        // A file from an older version, with fields missing, still loads.
+        let old: Settings = serde_json::from_str(r#"{"mailbox": false, "render_scale": 0.25}"#).unwrap();
+        assert_eq!(old, Settings { mailbox: false, render_scale: 0.25, ..Settings::default() });
+    }
+}
