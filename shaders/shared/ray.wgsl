@@ -5,8 +5,11 @@
 const INF: u32 = 0x7f800000u;
 const NO_HIT: u32 = 0xffffffffu;
 
+// +inf, built at run time: a constant expression may not evaluate to inf in WGSL, and Tint
+// (Chrome's WebGPU) rejects `bitcast<f32>(INF)` as one; a `var` keeps it out of const-eval.
 fn inf() -> f32 {
-    return bitcast<f32>(INF);
+    var bits = INF;
+    return bitcast<f32>(bits);
 }
 
 struct PreparedRay {
