@@ -54,36 +54,12 @@ pub fn ui(ui: &mut egui::Ui, v: &CostView) -> bool {
     } else {
         (ui.available_height() - 40.0) / 2.0
     };
-    Plot::new("predicted cost")
-        .legend(Legend::default())
-        .height(h.max(120.0))
-        .x_axis_label("m = cbrt(cells)")
-        .y_axis_label("predicted T(m)")
-        .link_axis(link, [true, false])
-        .show(ui, |p| {
-            let pts: Vec<[f64; 2]> = curve.iter().map(|s| [s.m, s.cost]).collect();
-            p.line(Line::new("predicted T(m)", pts.clone()));
-            p.points(Points::new("samples", pts).radius(3.0));
-            if let Some(m) = chosen_m {
-                p.vline(VLine::new(format!("chosen m = {m:.1}"), m));
-            }
-        });
+    let pts: Vec<[f64; 2]> = curve.iter().map(|s| [s.m, s.cost]).collect();
+    curve_plot(ui, "predicted T(m)", "samples", "predicted T(m)", pts, chosen_m, link, h);
     if !v.measurement.results.is_empty() {
-        Plot::new("measured frame time")
-            .legend(Legend::default())
-            .height(h.max(120.0))
-            .x_axis_label("m")
-            .y_axis_label("frame ms (flat grid, GPU)")
-            .link_axis(link, [true, false])
-            .show(ui, |p| {
-                let mut pts: Vec<[f64; 2]> = v.measurement.results.iter().map(|&(m, ms)| [m, ms]).collect();
-                pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
-                p.line(Line::new("measured frame ms", pts.clone()));
-                p.points(Points::new("measured", pts).radius(3.0));
-                if let Some(m) = chosen_m {
-                    p.vline(VLine::new(format!("chosen m = {m:.1}"), m));
-                }
-            });
+        let mut pts: Vec<[f64; 2]> = v.measurement.results.iter().map(|&(m, ms)| [m, ms]).collect();
+        pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        curve_plot(ui, "measured frame ms", "measured", "frame ms (flat grid, GPU)", pts, chosen_m, link, h);
     }
     let mut start = false;
     ui.horizontal(|ui| {
@@ -107,4 +83,32 @@ pub fn ui(ui: &mut egui::Ui, v: &CostView) -> bool {
         }
     });
     start
+}
+
+/// One curve over m (a line through its points) with the chosen m marked; the plots of the
+/// window share their x axis.
+#[allow(clippy::too_many_arguments)]
+fn curve_plot(
+    ui: &mut egui::Ui,
+    line: &str,
+    points: &str,
+    y_label: &str,
+    pts: Vec<[f64; 2]>,
+    chosen_m: Option<f64>,
+    link: egui::Id,
+    height: f32,
+) {
+    Plot::new(line)
+        .legend(Legend::default())
+        .height(height.max(120.0))
+        .x_axis_label("m = cbrt(cells)")
+        .y_axis_label(y_label)
+        .link_axis(link, [true, false])
+        .show(ui, |p| {
+            p.line(Line::new(line, pts.clone()));
+            p.points(Points::new(points, pts).radius(3.0));
+            if let Some(m) = chosen_m {
+                p.vline(VLine::new(format!("chosen m = {m:.1}"), m));
+            }
+        });
 }
