@@ -167,6 +167,8 @@ fn parse_resolution(s: &str) -> Result<Resolution, String> {
     s.parse()
 }
 
+// The subcommands are native-only; the browser build keeps the definitions for the app's flags.
+#[cfg_attr(target_arch = "wasm32", allow(dead_code))]
 impl GridArgs {
     pub fn cost_model(&self) -> anyhow::Result<CostModel> {
         let m = CostModel {

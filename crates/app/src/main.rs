@@ -30,7 +30,10 @@ fn main() -> anyhow::Result<()> {
 }
 
 /// In a browser the page's script calls the wasm module's start; `main` only starts the app.
+/// The build worker (web/worker.js) loads the same module and has no window: nothing starts.
 #[cfg(target_arch = "wasm32")]
 fn main() {
-    gui::start_web();
+    if web_sys::window().is_some() {
+        gui::start_web();
+    }
 }

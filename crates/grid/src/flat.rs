@@ -28,7 +28,7 @@ pub struct BuildOptions {
 }
 
 /// Milliseconds per build phase, in execution order.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PhaseTimes(pub Vec<(String, f64)>);
 
 impl PhaseTimes {
@@ -43,7 +43,7 @@ impl PhaseTimes {
     }
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FlatGrid {
     pub geom: GridGeometry,
     pub cell_start: Vec<u32>,

@@ -11,7 +11,7 @@
 
 use glam::{UVec3, Vec3};
 use gridrt_scene::Aabb;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::triangle::PreparedRay;
 
@@ -22,7 +22,7 @@ pub const MAX_AXIS_RES: u32 = 1024;
 pub const INSERT_MARGIN_CELLS: f64 = 1.0 / 256.0;
 
 /// The box and resolution of a uniform grid.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GridGeometry {
     pub min: Vec3,
     pub max: Vec3,

@@ -32,7 +32,7 @@
 
 use glam::{UVec3, Vec3};
 use gridrt_scene::{Hit, Ray};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::geometry::{GridGeometry, GridRay, INSERT_MARGIN_CELLS};
 use crate::mailbox::Mailbox;
@@ -49,7 +49,7 @@ pub const MAX_DEPTH: usize = 8;
 pub const MAX_CHILD_MARGIN: f64 = 0.125;
 
 /// One grid of the hierarchy.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Node {
     pub res: UVec3,
     pub first_cell: u32,
@@ -62,7 +62,7 @@ pub struct Node {
 }
 
 /// A hierarchy of uniform grids (see the module doc).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Hierarchy {
     /// The top grid's box and resolution.
     pub geom: GridGeometry,
@@ -72,7 +72,7 @@ pub struct Hierarchy {
 }
 
 /// Size figures of a hierarchy.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct HierarchyStats {
     pub nodes: u64,
     pub levels: u32,

@@ -19,7 +19,7 @@
 
 use glam::{UVec3, Vec3};
 use gridrt_scene::{Hit, Ray};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
 use crate::geometry::{GridGeometry, GridRay};
@@ -33,7 +33,7 @@ use crate::{BuildError, triangle_bounds};
 /// Macrocell sizes the cost model chooses among.
 pub const MACRO_SIZES: [u32; 4] = [2, 4, 8, 16];
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MacrocellGrid {
     pub fine: FlatGrid,
     /// Fine cells per macrocell edge (a power of two).
@@ -45,7 +45,7 @@ pub struct MacrocellGrid {
 }
 
 /// Occupancy figures for one candidate A.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MacroSample {
     pub a: u32,
     pub macro_cells: u64,

@@ -14,6 +14,7 @@
 
 use glam::{UVec3, Vec3};
 use gridrt_scene::{Hit, Ray};
+use serde::{Deserialize, Serialize};
 
 use crate::flat::FlatGrid;
 use crate::geometry::GridRay;
@@ -23,7 +24,7 @@ use crate::trace::test_refs;
 use crate::traversal::{Traversal, Walker};
 use crate::triangle::PreparedRay;
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProximityGrid {
     pub grid: FlatGrid,
     /// Chessboard distance to the nearest non-empty cell, per cell (x fastest).

@@ -125,7 +125,7 @@ impl std::str::FromStr for Resolution {
 }
 
 /// One sample of the guess-and-check curve.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CostSample {
     /// ∛(cells): the survey's m.
     pub m: f64,
@@ -140,7 +140,7 @@ pub struct CostSample {
 }
 
 /// The chosen resolution, and the sampled curve when the cost model chose it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ResolutionChoice {
     pub resolution: [u32; 3],
     pub policy: Resolution,

@@ -97,7 +97,7 @@ impl Default for GridConfig {
 }
 
 /// A built structure of any kind.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum AnyGrid {
     Flat(FlatGrid),
     Macrocell(MacrocellGrid),
@@ -107,7 +107,7 @@ pub enum AnyGrid {
 }
 
 /// What a build did: the resolution choice, macro-size samples, times, sizes.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BuildReport {
     pub kind: GridKind,
     pub triangles: usize,
@@ -118,7 +118,7 @@ pub struct BuildReport {
 }
 
 /// Size figures common to all kinds (`gridrt build --json`).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct StructureStats {
     /// Resolution of the flat / fine / top grid.
     pub resolution: [u32; 3],

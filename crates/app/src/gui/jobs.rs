@@ -1,7 +1,7 @@
 //! Work that must not block the UI: loading a scene and building a structure run on a thread
 //! (natively) and hand their result back through a channel; the UI polls each frame and shows
 //! a spinner with the elapsed time meanwhile. On wasm, where std threads do not exist, the job
-//! runs when it is spawned (the browser demo keeps its scenes small).
+//! runs on the page's thread once the browser has painted.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -79,6 +79,50 @@ pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation
     Ok(Built { scene_generation, config: *config, grid, report })
 }
 
+/// A built structure as bytes: how the browser's build worker hands it to the page.
+#[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+pub fn encode_structure(grid: &AnyGrid, report: &BuildReport) -> Result<Vec<u8>, String> {
+    postcard::to_allocvec(&(grid, report)).map_err(|e| format!("encoding the structure: {e}"))
+}
+
+/// The inverse of [`encode_structure`].
+#[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+pub fn decode_structure(bytes: &[u8]) -> Result<(AnyGrid, BuildReport), String> {
+    postcard::from_bytes(bytes).map_err(|e| format!("decoding the structure from the build worker: {e}"))
+}
+
+/// Starts building `config` for the scene of `scene_generation`: natively on a thread; in the
+/// browser in the build worker (web/worker.js: a second instance of this wasm), so that the
+/// page keeps running, or on the page's thread if the worker cannot start.
+pub fn spawn_build(
+    ui: &eframe::egui::Context,
+    tris: Arc<Vec<[Vec3; 3]>>,
+    config: GridConfig,
+    scene_generation: u64,
+) -> Job<Result<Built, String>> {
+    let what = format!("building the {} grid", config.kind);
+    #[cfg(target_arch = "wasm32")]
+    {
+        let (tx, rx) = channel();
+        let wake = ui.clone();
+        let sent = super::web::build_in_worker_async(&tris, &config, move |r| {
+            let built = r.and_then(|bytes| decode_structure(&bytes)).map(|(grid, report)| Built {
+                scene_generation,
+                config,
+                grid,
+                report,
+            });
+            let _ = tx.send(built);
+            wake.request_repaint();
+        });
+        match sent {
+            Ok(()) => return Job { rx, started: Instant::now(), what },
+            Err(e) => log::warn!("the build worker is unavailable ({e}): building on the page's thread"),
+        }
+    }
+    Job::spawn(what, ui, move || build_structure(&tris, &config, scene_generation))
+}
+
 /// One background job and its result channel.
 #[derive(Debug)]
 pub struct Job<T> {
@@ -102,8 +146,13 @@ impl<T: Send + 'static> Job<T> {
         };
         #[cfg(not(target_arch = "wasm32"))]
         std::thread::Builder::new().name("gridrt job".into()).spawn(run).expect("spawning a job thread");
+        // No threads in the browser: the job runs on the page's thread, after a zero-delay
+        // timeout so that the page first paints the spinner saying what is about to happen.
         #[cfg(target_arch = "wasm32")]
-        run();
+        wasm_bindgen_futures::spawn_local(async move {
+            super::web::yield_to_browser().await;
+            run();
+        });
         Job { rx, started: Instant::now(), what: what.into() }
     }
 
@@ -136,6 +185,20 @@ mod tests {
         assert!(e.contains("bad.glb"), "{e}");
         let e = load_scene(&SceneSource::Path("/nonexistent/x.glb".into())).unwrap_err();
         assert!(e.contains("x.glb"), "{e}");
+    }
+
+    #[test]
+    fn every_kind_survives_the_worker_encoding() {
+        let s = load_scene(&SceneSource::Default).unwrap();
+        for kind in gridrt_grid::GridKind::ALL {
+            let cfg = GridConfig { kind, ..GridConfig::default() };
+            let b = build_structure(&s.tris, &cfg, 1).unwrap();
+            let bytes = encode_structure(&b.grid, &b.report).unwrap();
+            let (grid, report) = decode_structure(&bytes).unwrap();
+            assert_eq!(grid, b.grid, "{kind}");
+            assert_eq!(serde_json::to_string(&report).unwrap(), serde_json::to_string(&b.report).unwrap());
+        }
+        assert!(decode_structure(&[1, 2, 3]).is_err());
     }
 
     #[test]

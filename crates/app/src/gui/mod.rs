@@ -8,11 +8,14 @@
 
 pub mod cost_plot;
 pub mod explainer;
+pub mod hook;
 pub mod jobs;
 pub mod orbit;
 pub mod panels;
 pub mod settings;
 pub mod viewport;
+#[cfg(target_arch = "wasm32")]
+pub mod web;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -25,6 +28,7 @@ use gridrt_scene::Camera;
 use web_time::Instant;
 
 use crate::cli::AppArgs;
+use hook::{CapturedFrame, Hook, HookCommand, HookStats};
 use jobs::{Built, Job, LoadedScene, SceneSource};
 use orbit::Orbit;
 use settings::Settings;
@@ -101,9 +105,22 @@ pub struct GridrtApp {
     factor_frame: u64,
     /// `--measure`: start the cost-model measurement when a structure with a cost curve is up.
     measure_at_start: bool,
-    /// A file dropped in the browser, while its bytes are read.
+    /// A file dropped or picked in the browser, while its bytes are read.
     #[cfg(target_arch = "wasm32")]
     dropped: Option<std::sync::mpsc::Receiver<Result<(String, Vec<u8>), String>>>,
+    /// The test hook (`window.gridrt` in the browser).
+    hook: Hook,
+    /// A fixed render size set through the hook (instead of following the window).
+    frame_size: Option<[u32; 2]>,
+    /// Captures asked for through the hook, and the one being read back.
+    captures: std::collections::VecDeque<u64>,
+    capture: Option<(u64, viewport::Captured)>,
+    /// Set by `central` when the frame on screen (or in flight) is for the current settings.
+    frame_current: bool,
+    /// Milliseconds from start to the first frame (the page's clock in a browser).
+    first_frame_ms: Option<f64>,
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
+    started: Instant,
 }
 
 /// While the camera moves, frames slower than this are rendered at a lower resolution; the
@@ -189,7 +206,15 @@ impl GridrtApp {
             measure_at_start: args.measure,
             #[cfg(target_arch = "wasm32")]
             dropped: None,
+            hook: Default::default(),
+            frame_size: None,
+            captures: Default::default(),
+            capture: None,
+            frame_current: false,
+            first_frame_ms: None,
+            started: Instant::now(),
         };
+        app.hook.lock().expect("hook lock").repaint = Some(cc.egui_ctx.clone());
         let source = args.scene.map_or(SceneSource::Default, SceneSource::Path);
         app.open(&cc.egui_ctx, source);
         app
@@ -251,9 +276,7 @@ impl GridrtApp {
                 self.build_error = None;
                 let tris = scene.loaded.tris.clone();
                 let generation = scene.generation;
-                self.build_job = Some(Job::spawn(format!("building the {} grid", want.kind), ctx, move || {
-                    jobs::build_structure(&tris, &want, generation)
-                }));
+                self.build_job = Some(jobs::spawn_build(ctx, tris, want, generation));
             }
         }
         if self.measure_at_start && self.last_key.is_some() && self.built.is_some() && self.build_job.is_none() {
@@ -398,6 +421,21 @@ impl GridrtApp {
                     }
                     ui.close();
                 }
+                // In the browser the picker is asynchronous: its bytes arrive like a dropped file's.
+                #[cfg(target_arch = "wasm32")]
+                if ui.button("Open…").clicked() {
+                    let (tx, rx) = std::sync::mpsc::channel();
+                    let ui_ctx = ui.ctx().clone();
+                    wasm_bindgen_futures::spawn_local(async move {
+                        let picked = rfd::AsyncFileDialog::new().add_filter("glTF", &["glb", "gltf"]).pick_file().await;
+                        if let Some(f) = picked {
+                            let _ = tx.send(Ok((f.file_name(), f.read().await)));
+                            ui_ctx.request_repaint();
+                        }
+                    });
+                    self.dropped = Some(rx);
+                    ui.close();
+                }
                 if ui.button("Default scene").clicked() {
                     self.open(ui.ctx(), SceneSource::Default);
                     ui.close();
@@ -517,7 +555,111 @@ impl GridrtApp {
     }
 
     /// The central image; submits a frame when the render key changed.
+    /// Shares the test hook with the page (`window.gridrt`).
+    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+    pub fn with_hook(self, hook: Hook) -> GridrtApp {
+        let repaint = self.hook.lock().expect("hook lock").repaint.clone();
+        hook.lock().expect("hook lock").repaint = repaint;
+        GridrtApp { hook, ..self }
+    }
+
+    /// Applies the commands the page sent; captures wait until the app is idle.
+    fn apply_hook_commands(&mut self, ctx: &egui::Context) {
+        let commands: Vec<HookCommand> = self.hook.lock().expect("hook lock").commands.drain(..).collect();
+        for c in commands {
+            match c {
+                HookCommand::Grid(k) => self.settings.grid.kind = k,
+                HookCommand::View(v) => self.settings.view = v.name().into(),
+                HookCommand::Traversal(t) => self.settings.traversal = t,
+                HookCommand::Camera(cam) => match &self.scene {
+                    Some(s) => self.orbit = Orbit::from_camera(&cam, &s.loaded.bounds),
+                    None => self.initial_camera = Some(cam),
+                },
+                HookCommand::FrameSize(size) => self.frame_size = size,
+                HookCommand::Open { name, bytes } => self.open(ctx, SceneSource::Bytes { name, bytes }),
+                HookCommand::Capture(id) => self.captures.push_back(id),
+            }
+        }
+    }
+
+    /// Nothing is loading, building or rendering, and the last frame shows the current settings.
+    fn idle(&self) -> bool {
+        self.scene_job.is_none()
+            && self.build_job.is_none()
+            && self.measure_job.is_none()
+            && !self.viewport.busy()
+            && self.frame_current
+            && self.hook.lock().expect("hook lock").commands.is_empty()
+    }
+
+    /// Starts a waiting capture once idle, collects a finished one, and publishes the stats.
+    fn update_hook(&mut self) {
+        if self.first_frame_ms.is_none() && self.viewport.frames_done > 0 {
+            #[cfg(target_arch = "wasm32")]
+            let ms = web::page_ms();
+            #[cfg(not(target_arch = "wasm32"))]
+            let ms = Some(self.started.elapsed().as_secs_f64() * 1e3);
+            self.first_frame_ms = ms;
+        }
+        if self.capture.is_none()
+            && !self.captures.is_empty()
+            && self.idle()
+            && let Some(gpu) = &self.gpu
+            && let Some(slot) = self.viewport.capture(gpu)
+        {
+            let id = self.captures.pop_back().expect("a capture");
+            self.captures.clear();
+            self.capture = Some((id, slot));
+        }
+        if let Some((id, slot)) = &self.capture {
+            let done = slot.lock().expect("capture lock").take();
+            match done {
+                Some(Ok((width, height, rgba))) => {
+                    self.hook.lock().expect("hook lock").frame = Some(CapturedFrame { id: *id, width, height, rgba });
+                    self.capture = None;
+                }
+                Some(Err(e)) => {
+                    self.error = Some(format!("reading the frame back: {e}"));
+                    self.capture = None;
+                }
+                None => {}
+            }
+        }
+        let built = self.built.as_ref().map(|b| &b.built);
+        let last = self.viewport.last;
+        let stats = HookStats {
+            frames: self.viewport.frames_done,
+            adapter: self.gpu.as_ref().map_or_else(String::new, |g| g.ctx.adapter_name()),
+            grid: built.map_or_else(String::new, |b| b.config.kind.to_string()),
+            traversal: self.settings.traversal.short_name().into(),
+            view: last.map_or_else(String::new, |f| f.view.name().into()),
+            scene: self.scene.as_ref().map_or_else(String::new, |s| s.loaded.name.clone()),
+            triangles: self.scene.as_ref().map_or(0, |s| s.loaded.tris.len() as u64),
+            mean_cells_per_ray: last.map_or(0.0, |f| f.mean_cells()),
+            mean_tests_per_ray: last.map_or(0.0, |f| f.mean_tests()),
+            width: last.map_or(0, |f| f.width),
+            height: last.map_or(0, |f| f.height),
+            frame_ms: last.map_or(0.0, |f| f.ms),
+            build_ms: built.map_or(0.0, |b| b.report.times.total()),
+            idle: self.idle() && self.captures.is_empty() && self.capture.is_none(),
+            error: [&self.error, &self.gpu_error, &self.viewport.error]
+                .into_iter()
+                .flatten()
+                .cloned()
+                .chain(self.build_error.as_ref().map(|(_, e)| e.clone()))
+                .reduce(|a, b| format!("{a}; {b}")),
+            first_frame_ms: self.first_frame_ms,
+        };
+        self.hook.lock().expect("hook lock").stats = stats;
+        if (!self.captures.is_empty() || self.capture.is_some())
+            && let Some(c) = &self.hook.lock().expect("hook lock").repaint
+        {
+            c.request_repaint();
+        }
+    }
+
     fn central(&mut self, ui: &mut egui::Ui) {
+        self.frame_current = false;
         let avail = ui.available_size();
         let ppp = ui.ctx().pixels_per_point();
         let (rect, resp) = ui.allocate_exact_size(avail, Sense::click_and_drag());
@@ -541,10 +683,10 @@ impl GridrtApp {
             ui.ctx().request_repaint_after(std::time::Duration::from_secs_f64(REST_AFTER_S));
         }
         let scale = self.settings.render_scale.clamp(0.05, 1.0) * self.interactive_factor;
-        let size = [
+        let size = self.frame_size.unwrap_or([
             ((avail.x * ppp * scale).round() as u32).clamp(1, gridrt_gpu::render::MAX_IMAGE_SIDE),
             ((avail.y * ppp * scale).round() as u32).clamp(1, gridrt_gpu::render::MAX_IMAGE_SIDE),
-        ];
+        ]);
         if let Some(tex) = self.viewport.texture() {
             let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
             ui.painter().image(tex, rect, uv, egui::Color32::WHITE);
@@ -581,6 +723,7 @@ impl GridrtApp {
             self.viewport.cancel();
             self.viewport.error = Some(e.to_string());
         }
+        self.frame_current = true;
         if self.viewport.busy() {
             ui.ctx().request_repaint();
         }
@@ -677,6 +820,7 @@ impl GridrtApp {
 impl eframe::App for GridrtApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
+        self.apply_hook_commands(&ctx);
         self.poll_jobs(&ctx);
         self.dropped_files(&ctx);
         if self.scene_job.is_some() || self.build_job.is_some() || self.measure_job.is_some() {
@@ -755,6 +899,7 @@ impl eframe::App for GridrtApp {
             });
         self.settings.show_explainer = open;
         self.smoke_step(&ctx);
+        self.update_hook();
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
@@ -833,13 +978,17 @@ pub fn start_web() {
             .dyn_into::<eframe::web_sys::HtmlCanvasElement>()
             .expect("gridrt_canvas is a canvas");
         let status: SmokeStatus = Default::default();
-        let result = eframe::WebRunner::new()
+        let hook: Hook = Default::default();
+        let runner = eframe::WebRunner::new();
+        web::install(hook.clone(), runner.clone());
+        let result = runner
             .start(
                 canvas,
                 options,
-                Box::new(
-                    move |cc| Ok(Box::new(GridrtApp::new(cc, AppArgs::default(), status)) as Box<dyn eframe::App>),
-                ),
+                Box::new(move |cc| {
+                    let app = GridrtApp::new(cc, AppArgs::default(), status).with_hook(hook);
+                    Ok(Box::new(app) as Box<dyn eframe::App>)
+                }),
             )
             .await;
         if let Some(el) = document.get_element_by_id("loading_text") {

@@ -64,6 +64,9 @@ impl FrameStats {
     }
 }
 
+/// A frame read back by [`Viewport::capture`]: width, height, RGBA8 pixels.
+pub type Captured = Arc<Mutex<Option<Result<(u32, u32, Vec<u8>), String>>>>;
+
 /// Set when a tile (or the totals readback) is done: the completion time, or the error.
 type Done = Arc<Mutex<Option<Result<Instant, String>>>>;
 
@@ -72,6 +75,17 @@ type Done = Arc<Mutex<Option<Result<Instant, String>>>>;
 const TILE_MS: f64 = 60.0;
 /// GPU work submitted per UI wake-up.
 const STEP_MS: f64 = 150.0;
+/// Most tiles, and fewest pixels per UI wake-up, per frame. In a browser a tile's completion
+/// is only seen at the next animation frame, after the page's own (software-rendered, slow)
+/// paint, so the measured rate underestimates the GPU: fewer, larger tiles there.
+#[cfg(not(target_arch = "wasm32"))]
+const MAX_TILES: u32 = 128;
+#[cfg(not(target_arch = "wasm32"))]
+const MAX_WAKES: u32 = 128;
+#[cfg(target_arch = "wasm32")]
+const MAX_TILES: u32 = 8;
+#[cfg(target_arch = "wasm32")]
+const MAX_WAKES: u32 = 4;
 
 /// A frame being rendered tile by tile.
 #[derive(Debug)]
@@ -246,9 +260,9 @@ impl Viewport {
         let q = tile_quantum(&gpu.ctx);
         // Tiles of ~TILE_MS, at most ~128 a frame; several per UI wake-up, up to STEP_MS of
         // work, since each wake-up repaints the UI (costly on a software adapter).
-        let floor = (f.n / 128).max(q) as f64;
+        let floor = (f.n / MAX_TILES).max(q) as f64;
         let tile = ((self.rate * TILE_MS).clamp(floor, f.n as f64) as u32 / q * q).max(q);
-        let budget = (self.rate * STEP_MS).max(tile as f64) as u64;
+        let budget = (self.rate * STEP_MS).max(tile as f64).max((f.n / MAX_WAKES) as f64) as u64;
         let started = Instant::now();
         let mut count = 0u32;
         let mut index = None;
@@ -284,6 +298,40 @@ impl Viewport {
             f.totals = Some(totals);
         }
         Ok(completed)
+    }
+
+    /// Reads the last finished frame back (RGBA8): `None` while a frame is in flight or before
+    /// the first one. The result arrives asynchronously in the returned slot.
+    pub fn capture(&self, gpu: &Gpu) -> Option<Captured> {
+        let t = self.target.as_ref()?;
+        if self.frames_done == 0 || self.busy() {
+            return None;
+        }
+        let (w, h, size) = (t.width, t.height, t.pixel_count() * 4);
+        let dev = &gpu.ctx.device;
+        let buf = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame capture readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame capture") });
+        enc.copy_buffer_to_buffer(&t.pixels, 0, &buf, 0, size);
+        gpu.ctx.queue.submit([enc.finish()]);
+        let slot: Captured = Arc::new(Mutex::new(None));
+        let (out, b, ui) = (slot.clone(), buf.clone(), gpu.ui.clone());
+        buf.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let result = r.map_err(|e| e.to_string()).and_then(|()| {
+                let view = b.slice(..).get_mapped_range().map_err(|e| e.to_string())?;
+                let rgba = view.to_vec();
+                drop(view);
+                b.unmap();
+                Ok((w, h, rgba))
+            });
+            *out.lock().expect("capture lock") = Some(result);
+            ui.request_repaint();
+        });
+        Some(slot)
     }
 
     /// Renders a whole frame, blocking until it is done (the cost-model measurement times

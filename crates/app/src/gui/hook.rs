@@ -1,0 +1,160 @@
+//! The app's test hook: what `window.gridrt` exposes in the browser (see `web.rs`), kept
+//! platform-independent so that it is unit-tested natively.
+//!
+//! The page (or a test driving it) sends [`HookCommand`]s, which the app applies at the start
+//! of its next update; the app publishes a [`HookStats`] snapshot at the end of each update and,
+//! on request, reads its last finished frame back into [`CapturedFrame`].
+
+// Natively only the unit tests and the app's side use this; the commands come from the page.
+#![cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+
+use gridrt_gpu::View;
+use gridrt_grid::{GridKind, Traversal};
+use gridrt_scene::Camera;
+use serde::Serialize;
+
+/// What `window.gridrt.stats()` returns.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct HookStats {
+    /// Frames rendered since start.
+    pub frames: u64,
+    pub adapter: String,
+    /// Kind of the structure on screen (not the one being built).
+    pub grid: String,
+    pub traversal: String,
+    pub view: String,
+    /// Name of the scene on screen.
+    pub scene: String,
+    pub triangles: u64,
+    /// Of the last frame's primary rays.
+    pub mean_cells_per_ray: f64,
+    pub mean_tests_per_ray: f64,
+    /// Size and GPU time of the last frame.
+    pub width: u32,
+    pub height: u32,
+    pub frame_ms: f64,
+    /// Build time of the structure on screen.
+    pub build_ms: f64,
+    /// No load or build running, no frame in flight, the last frame shows the current settings
+    /// and no command is waiting.
+    pub idle: bool,
+    /// The error the UI shows (load, build, GPU), if any.
+    pub error: Option<String>,
+    /// Milliseconds from page start to the first frame (browser clock).
+    pub first_frame_ms: Option<f64>,
+}
+
+/// A command from the page.
+#[derive(Clone, Debug, PartialEq)]
+pub enum HookCommand {
+    Grid(GridKind),
+    View(View),
+    Traversal(Traversal),
+    Camera(Camera),
+    /// Render at this fixed size instead of following the window (`None`: follow it again).
+    FrameSize(Option<[u32; 2]>),
+    /// Read back the last finished frame (`id` is returned to the caller).
+    Capture(u64),
+    /// Open a scene from bytes (a file the page fetched, picked or had dropped).
+    Open {
+        name: String,
+        bytes: Arc<[u8]>,
+    },
+}
+
+impl HookCommand {
+    /// Parses the string forms `window.gridrt.set_*` take; errors name what was expected.
+    pub fn grid(s: &str) -> Result<HookCommand, String> {
+        s.parse::<GridKind>().map(HookCommand::Grid)
+    }
+    pub fn view(s: &str) -> Result<HookCommand, String> {
+        s.parse::<View>().map(HookCommand::View)
+    }
+    pub fn traversal(s: &str) -> Result<HookCommand, String> {
+        match s.parse::<Traversal>()? {
+            Traversal::Bresenham => Err("bresenham has no GPU walker (it misses cells); use aw, cw or liu".into()),
+            t => Ok(HookCommand::Traversal(t)),
+        }
+    }
+    pub fn camera(s: &str) -> Result<HookCommand, String> {
+        Camera::parse(s).map(HookCommand::Camera)
+    }
+    pub fn frame_size(w: u32, h: u32) -> Result<HookCommand, String> {
+        let max = gridrt_gpu::render::MAX_IMAGE_SIDE;
+        match (w, h) {
+            (0, 0) => Ok(HookCommand::FrameSize(None)),
+            (1.., 1..) if w <= max && h <= max => Ok(HookCommand::FrameSize(Some([w, h]))),
+            _ => Err(format!("frame size {w}x{h}: each side must be 1..={max} (0, 0 follows the window)")),
+        }
+    }
+}
+
+/// A frame read back for the page: RGBA8, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CapturedFrame {
+    /// The `Capture` id it answers.
+    pub id: u64,
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
+/// State shared between the app and the page.
+#[derive(Debug, Default)]
+pub struct HookState {
+    pub stats: HookStats,
+    pub commands: VecDeque<HookCommand>,
+    pub frame: Option<CapturedFrame>,
+    next_capture: u64,
+    /// Wakes the app when a command arrives.
+    pub repaint: Option<eframe::egui::Context>,
+}
+
+pub type Hook = Arc<Mutex<HookState>>;
+
+impl HookState {
+    /// Queues a capture and returns its id.
+    pub fn capture(&mut self) -> u64 {
+        self.next_capture += 1;
+        self.commands.push_back(HookCommand::Capture(self.next_capture));
+        self.next_capture
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn commands_parse_and_bad_values_are_explained() {
+        assert_eq!(HookCommand::grid("macrocell"), Ok(HookCommand::Grid(GridKind::Macrocell)));
+        assert!(HookCommand::grid("octree").is_err());
+        assert_eq!(HookCommand::view("heatmap-cells"), Ok(HookCommand::View(View::HeatmapCells)));
+        assert!(HookCommand::view("wireframe").unwrap_err().contains("shaded"));
+        assert_eq!(HookCommand::traversal("liu"), Ok(HookCommand::Traversal(Traversal::Liu)));
+        assert!(HookCommand::traversal("bresenham").unwrap_err().contains("GPU"));
+        let HookCommand::Camera(c) = HookCommand::camera("1,2,3,0,0,0,45").unwrap() else { panic!() };
+        assert_eq!((c.eye, c.vfov_deg), (glam::Vec3::new(1.0, 2.0, 3.0), 45.0));
+        assert!(HookCommand::camera("1,2").is_err());
+        assert_eq!(HookCommand::frame_size(0, 0), Ok(HookCommand::FrameSize(None)));
+        assert_eq!(HookCommand::frame_size(320, 240), Ok(HookCommand::FrameSize(Some([320, 240]))));
+        assert!(HookCommand::frame_size(0, 240).is_err());
+        assert!(HookCommand::frame_size(1 << 20, 2).is_err());
+    }
+
+    #[test]
+    fn captures_get_increasing_ids_and_queue_in_order() {
+        let mut h = HookState::default();
+        h.commands.push_back(HookCommand::Grid(GridKind::Flat));
+        assert_eq!((h.capture(), h.capture()), (1, 2));
+        assert_eq!(h.commands.len(), 3);
+        assert_eq!(h.commands[1], HookCommand::Capture(1));
+        let json = serde_json::to_value(&h.stats).unwrap();
+        for key in ["frames", "adapter", "grid", "triangles", "mean_cells_per_ray", "idle", "error"] {
+            assert!(json.get(key).is_some(), "stats() lacks {key}");
+        }
+    }
+}
