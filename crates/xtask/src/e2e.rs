@@ -32,6 +32,8 @@ const CAMERA: &str = "3.2,2.6,4.4,0,0.1,0,42";
 const BACKGROUND: [u8; 3] = [20, 23, 31];
 /// Required share of pixels with the same hit/miss as the native render.
 const MIN_AGREEMENT: f64 = 0.99;
+/// Longest gap between animation frames allowed while a large scene builds.
+const MAX_FRAME_GAP_MS: f64 = 1500.0;
 /// Largest mean absolute colour difference (0–255 per channel) against the native render.
 const MAX_MEAN_DIFF: f64 = 3.0;
 
@@ -78,7 +80,7 @@ fn wait_idle(page: &mut Page, what: &str, cond: &str, timeout: Duration) -> anyh
         "(() => {{ const m = document.querySelector('#message.error'); \
          if (m) throw new Error('the page shows: ' + m.innerText); \
          const s = window.gridrt && window.gridrt.stats(); \
-         if (s && s.error) throw new Error('the app reports: ' + s.error); \
+         if (s && s.idle && s.error) throw new Error('the app reports: ' + s.error); \
          return s && s.idle && ({cond}) ? s : null; }})()"
     );
     page.wait_for(what, &expr, timeout)
@@ -116,6 +118,13 @@ pub fn run(root: &Path, dist: &Path, out: &Path, chromium: Option<PathBuf>, time
         .status()?;
     ensure!(st.success(), "gridrt gen failed");
     let gen_tris = gltf_triangles(root, &gen_path)?;
+    // A large one, to check that the page keeps drawing while it builds in the worker.
+    let st = Command::new(&cargo)
+        .current_dir(root)
+        .args(["run", "-q", "-p", "gridrt", "--", "gen", "mountain", "--size", "9", "-o"])
+        .arg(dist.join("e2e-large.glb"))
+        .status()?;
+    ensure!(st.success(), "gridrt gen failed");
     std::fs::write(dist.join("e2e-corrupt.glb"), b"glTF\x02\x00\x00\x00\xff\xff\x00\x00not a glb at all")?;
 
     println!("web-test: native reference renders ({WIDTH}x{HEIGHT}, camera {CAMERA})");
@@ -282,7 +291,49 @@ fn drive(
     println!("web-test: the corrupt file shows {err} and the previous scene stays");
     std::fs::write(out.join("screenshot-corrupt.png"), page.screenshot()?)?;
 
+    // The page keeps drawing while a large scene builds in the worker: animation frames keep
+    // coming (a build on the page's thread would stall them for the whole build).
+    page.eval("window.gridrt.dismiss_error(); window.gridrt.set_grid('multires'); true")?;
+    wait_idle(page, "the multires grid", "s.grid === 'multires' && s.scene === 'e2e-scene.glb'", timeout)?;
+    let workers_before = page.eval("window.gridrt.stats().worker_builds")?.as_u64().unwrap_or(0);
+    let r = page.eval(
+        "(async () => { \
+           const b = await (await fetch('e2e-large.glb')).arrayBuffer(); \
+           window.gridrt.open_bytes('e2e-large.glb', new Uint8Array(b)); \
+           const gaps = []; let last = performance.now(), prev = false, seen = false; const t0 = last; \
+           while (performance.now() - t0 < 600000) { \
+             await new Promise(r => requestAnimationFrame(r)); \
+             const now = performance.now(), s = window.gridrt.stats(); \
+             const building = s.scene === 'e2e-large.glb' && s.building; \
+             if (building && prev) gaps.push(now - last); \
+             if (building) seen = true; else if (seen) break; \
+             prev = building; last = now; } \
+           return { seen, frames: gaps.length, max_gap_ms: Math.max(0, ...gaps), \
+                    mean_gap_ms: gaps.reduce((a, b) => a + b, 0) / Math.max(1, gaps.length) }; })()",
+    )?;
+    let s = wait_idle(page, "the large scene", "s.scene === 'e2e-large.glb' && s.grid === 'multires'", timeout)?;
+    let workers = s["worker_builds"].as_u64().unwrap_or(0);
+    println!(
+        "web-test: e2e-large.glb ({} tris) built in the worker in {:.0} ms; meanwhile {} animation frames, \
+         longest gap {:.0} ms, mean {:.0} ms",
+        s["triangles"],
+        s["build_ms"].as_f64().unwrap_or(0.0),
+        r["frames"],
+        r["max_gap_ms"].as_f64().unwrap_or(0.0),
+        r["mean_gap_ms"].as_f64().unwrap_or(0.0)
+    );
+    ensure!(workers > workers_before, "the large scene was not built in the build worker");
+    ensure!(r["seen"] == true && r["frames"].as_u64().unwrap_or(0) >= 2, "no animation frames while building: {r}");
+    ensure!(
+        r["max_gap_ms"].as_f64().unwrap_or(f64::MAX) < MAX_FRAME_GAP_MS,
+        "the page stalled for {} ms while building (limit {MAX_FRAME_GAP_MS} ms)",
+        r["max_gap_ms"]
+    );
+    std::fs::write(out.join("screenshot-large.png"), page.screenshot()?)?;
+
     let report = json!({
+        "responsiveness": r,
+        "large_scene": s,
         "wasm_bytes": wasm_raw,
         "wasm_gzip_bytes": wasm_gz,
         "time_to_first_frame_ms": ttff,

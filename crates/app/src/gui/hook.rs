@@ -38,6 +38,10 @@ pub struct HookStats {
     pub frame_ms: f64,
     /// Build time of the structure on screen.
     pub build_ms: f64,
+    /// A structure is being built (the previous one stays on screen meanwhile).
+    pub building: bool,
+    /// Structures built so far by the browser's build worker.
+    pub worker_builds: u64,
     /// No load or build running, no frame in flight, the last frame shows the current settings
     /// and no command is waiting.
     pub idle: bool,
@@ -63,6 +67,8 @@ pub enum HookCommand {
         name: String,
         bytes: Arc<[u8]>,
     },
+    /// Dismiss the error the UI shows (as its "dismiss" button does).
+    DismissError,
 }
 
 impl HookCommand {
@@ -116,6 +122,12 @@ pub struct HookState {
 pub type Hook = Arc<Mutex<HookState>>;
 
 impl HookState {
+    /// The stats as the page sees them: not idle while commands wait (the published snapshot
+    /// is from the app's last update, which may predate them).
+    pub fn snapshot(&self) -> HookStats {
+        HookStats { idle: self.stats.idle && self.commands.is_empty(), ..self.stats.clone() }
+    }
+
     /// Queues a capture and returns its id.
     pub fn capture(&mut self) -> u64 {
         self.next_capture += 1;
@@ -151,6 +163,10 @@ mod tests {
         h.commands.push_back(HookCommand::Grid(GridKind::Flat));
         assert_eq!((h.capture(), h.capture()), (1, 2));
         assert_eq!(h.commands.len(), 3);
+        h.stats.idle = true;
+        assert!(!h.snapshot().idle, "commands are waiting");
+        h.commands.clear();
+        assert!(h.snapshot().idle);
         assert_eq!(h.commands[1], HookCommand::Capture(1));
         let json = serde_json::to_value(&h.stats).unwrap();
         for key in ["frames", "adapter", "grid", "triangles", "mean_cells_per_ray", "idle", "error"] {

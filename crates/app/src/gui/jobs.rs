@@ -70,13 +70,15 @@ pub struct Built {
     pub config: GridConfig,
     pub grid: AnyGrid,
     pub report: BuildReport,
+    /// Built by the browser's build worker (not on the page's or the app's thread).
+    pub in_worker: bool,
 }
 
 /// Builds `config` over `tris`.
 pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation: u64) -> Result<Built, String> {
     let (grid, report) =
         structure::build(tris, config).map_err(|e| format!("building the {} grid: {e}", config.kind))?;
-    Ok(Built { scene_generation, config: *config, grid, report })
+    Ok(Built { scene_generation, config: *config, grid, report, in_worker: false })
 }
 
 /// A built structure as bytes: how the browser's build worker hands it to the page.
@@ -111,6 +113,7 @@ pub fn spawn_build(
                 config,
                 grid,
                 report,
+                in_worker: true,
             });
             let _ = tx.send(built);
             wake.request_repaint();

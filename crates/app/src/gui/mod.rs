@@ -119,6 +119,7 @@ pub struct GridrtApp {
     frame_current: bool,
     /// Milliseconds from start to the first frame (the page's clock in a browser).
     first_frame_ms: Option<f64>,
+    worker_builds: u64,
     #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     started: Instant,
 }
@@ -212,6 +213,7 @@ impl GridrtApp {
             capture: None,
             frame_current: false,
             first_frame_ms: None,
+            worker_builds: 0,
             started: Instant::now(),
         };
         app.hook.lock().expect("hook lock").repaint = Some(cc.egui_ctx.clone());
@@ -310,6 +312,7 @@ impl GridrtApp {
     }
 
     fn set_built(&mut self, built: Built) {
+        self.worker_builds += u64::from(built.in_worker);
         let gpu = self.gpu.as_ref().and_then(|g| match GpuStructure::new(&g.ctx, &built.grid) {
             Ok(s) => Some(s),
             Err(e) => {
@@ -578,6 +581,7 @@ impl GridrtApp {
                 HookCommand::FrameSize(size) => self.frame_size = size,
                 HookCommand::Open { name, bytes } => self.open(ctx, SceneSource::Bytes { name, bytes }),
                 HookCommand::Capture(id) => self.captures.push_back(id),
+                HookCommand::DismissError => self.error = None,
             }
         }
     }
@@ -641,6 +645,8 @@ impl GridrtApp {
             height: last.map_or(0, |f| f.height),
             frame_ms: last.map_or(0.0, |f| f.ms),
             build_ms: built.map_or(0.0, |b| b.report.times.total()),
+            building: self.build_job.is_some(),
+            worker_builds: self.worker_builds,
             idle: self.idle() && self.captures.is_empty() && self.capture.is_none(),
             error: [&self.error, &self.gpu_error, &self.viewport.error]
                 .into_iter()

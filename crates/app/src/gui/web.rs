@@ -7,6 +7,7 @@
 //!   `set_camera("ex,ey,ez,tx,ty,tz,fov")`, `set_frame_size(w, h)` (0, 0 follows the window):
 //!   throw on a bad value;
 //! - `open_bytes(name, Uint8Array)`: opens a .glb/.gltf as a dropped file would;
+//! - `dismiss_error()`: clears the error the UI shows (like its "dismiss" button);
 //! - `capture()` → id; then `last_frame()` → `{id, width, height, rgba: Uint8Array}` or null;
 //! - `panic()` → the panic message, or null.
 
@@ -38,7 +39,7 @@ pub fn install(hook: Hook, runner: eframe::WebRunner) {
 
     let h = hook.clone();
     let f = Closure::<dyn Fn() -> JsValue>::new(move || {
-        let s = h.lock().expect("hook lock").stats.clone();
+        let s = h.lock().expect("hook lock").snapshot();
         serde_json::to_string(&s).ok().and_then(|t| js_sys::JSON::parse(&t).ok()).unwrap_or(JsValue::NULL)
     });
     set(&obj, "stats", f.as_ref());
@@ -59,6 +60,11 @@ pub fn install(hook: Hook, runner: eframe::WebRunner) {
         set(&obj, name, f.as_ref());
         f.forget();
     }
+
+    let h = hook.clone();
+    let f = Closure::<dyn Fn()>::new(move || push(&h, HookCommand::DismissError));
+    set(&obj, "dismiss_error", f.as_ref());
+    f.forget();
 
     let h = hook.clone();
     let f = Closure::<dyn Fn(u32, u32) -> Result<(), JsValue>>::new(move |w: u32, hh: u32| {
