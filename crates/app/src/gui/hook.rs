@@ -163,11 +163,11 @@ mod tests {
         h.commands.push_back(HookCommand::Grid(GridKind::Flat));
         assert_eq!((h.capture(), h.capture()), (1, 2));
         assert_eq!(h.commands.len(), 3);
+        assert_eq!(h.commands[1], HookCommand::Capture(1));
         h.stats.idle = true;
         assert!(!h.snapshot().idle, "commands are waiting");
         h.commands.clear();
         assert!(h.snapshot().idle);
-        assert_eq!(h.commands[1], HookCommand::Capture(1));
         let json = serde_json::to_value(&h.stats).unwrap();
         for key in ["frames", "adapter", "grid", "triangles", "mean_cells_per_ray", "idle", "error"] {
             assert!(json.get(key).is_some(), "stats() lacks {key}");
