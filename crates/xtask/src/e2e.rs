@@ -331,6 +331,34 @@ fn drive(
     );
     std::fs::write(out.join("screenshot-large.png"), page.screenshot()?)?;
 
+    // Without WebGPU the page explains itself instead of staying blank: a browser without
+    // navigator.gpu, and one whose requestAdapter() finds nothing.
+    let cases = [
+        (
+            "no-webgpu",
+            "Object.defineProperty(Navigator.prototype, 'gpu', { get: () => undefined, configurable: true });",
+            "does not offer WebGPU",
+        ),
+        ("no-adapter", "if (navigator.gpu) navigator.gpu.requestAdapter = async () => null;", "no GPU adapter"),
+    ];
+    for (name, script, expect) in cases {
+        let added = page.call("Page.addScriptToEvaluateOnNewDocument", json!({"source": script}), true)?;
+        page.call("Page.navigate", json!({"url": url}), true)?;
+        let text = page.wait_for(
+            &format!("the page's {name} message"),
+            "(() => { const m = document.querySelector('#message.error'); return m ? m.innerText : null; })()",
+            Duration::from_secs(60),
+        )?;
+        let text = text.as_str().unwrap_or_default().to_string();
+        ensure!(
+            text.contains(expect) && text.contains("no WebGL fallback"),
+            "the {name} page says {text:?}, expected {expect:?} and the missing WebGL fallback"
+        );
+        std::fs::write(out.join(format!("screenshot-{name}.png")), page.screenshot()?)?;
+        page.call("Page.removeScriptToEvaluateOnNewDocument", json!({"identifier": added["identifier"]}), true)?;
+        println!("web-test: {name}: the page says \"{}\"", text.lines().next().unwrap_or_default());
+    }
+
     let report = json!({
         "responsiveness": r,
         "large_scene": s,
