@@ -87,6 +87,8 @@ pub enum Command {
     Render(RenderArgs),
     /// Measure Mrays/s of the CPU (all threads) and the GPU on primary and random rays.
     BenchTrace(BenchTraceArgs),
+    /// Run one of the survey's experiments: CSV/JSON rows, SVG/PNG charts and a table.
+    Experiment(ExperimentArgs),
     /// Build and trace the embedded default scene on the CPU, check against brute force, print a summary.
     Demo,
 }
@@ -356,6 +358,42 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err("width and height must be in 1..=16384".into());
     }
     Ok((w, h))
+}
+
+#[derive(Debug, Args)]
+pub struct ExperimentArgs {
+    /// Which experiment: fig5 (time, N_m and memory against m per scene kind, with the cost
+    /// model), bresenham (cells a naive Bresenham misses), models (fastest m against N for
+    /// point- and line-like scenes).
+    #[arg(value_enum)]
+    pub name: ExperimentName,
+    /// Folder of .glb scenes with a manifest.json giving each file's kind (fig5; default:
+    /// ../shared/scenes when present, else procedural stand-ins).
+    #[arg(long)]
+    pub scenes: Option<PathBuf>,
+    /// Output folder for the CSV, JSON, SVG and PNG files.
+    #[arg(long, default_value = "out/experiments")]
+    pub out: PathBuf,
+    /// Rays per measurement.
+    #[arg(long, default_value_t = 100_000)]
+    pub rays: usize,
+    /// Fewer and smaller cases (a smoke run in seconds).
+    #[arg(long)]
+    pub quick: bool,
+    /// Skip the GPU measurements (fig5).
+    #[arg(long)]
+    pub no_gpu: bool,
+    /// fig5: use the procedural stand-in scenes even when a scenes folder exists.
+    #[arg(long, conflicts_with = "scenes")]
+    pub procedural: bool,
+}
+
+/// The experiments of `gridrt experiment`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ExperimentName {
+    Fig5,
+    Bresenham,
+    Models,
 }
 
 #[derive(Debug, Args)]

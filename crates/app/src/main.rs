@@ -26,6 +26,7 @@ fn main() -> anyhow::Result<()> {
         Some(cli::Command::Trace(a)) => commands::trace::run(a),
         Some(cli::Command::Render(a)) => commands::render::run(a),
         Some(cli::Command::BenchTrace(a)) => commands::bench_trace::run(a),
+        Some(cli::Command::Experiment(a)) => commands::experiment::run(a),
     }
 }
 

@@ -133,6 +133,33 @@ fn help_on_everything_and_default_scene() {
 }
 
 #[test]
+fn experiments_write_rows_and_charts() {
+    let out = tmp("experiments");
+    for (name, extra) in [("bresenham", &[][..]), ("models", &[][..]), ("fig5", &["--procedural"][..])] {
+        let mut args = vec!["experiment", name, "--quick", "--out", s(&out)];
+        args.extend_from_slice(extra);
+        let text = ok(&args);
+        assert!(text.contains("wrote"), "{name}: {text}");
+        let csv = std::fs::read_to_string(out.join(format!("{name}.csv"))).unwrap();
+        assert!(csv.lines().count() >= 3, "{name}.csv has too few rows:\n{csv}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join(format!("{name}.json"))).unwrap()).unwrap();
+        assert!(json.as_array().is_some_and(|a| !a.is_empty()), "{name}.json");
+    }
+    for chart in ["bresenham", "models", "fig5-sphereflakeprocedural-time", "fig5-particlesprocedural-size"] {
+        assert!(std::fs::read_to_string(out.join(format!("{chart}.svg"))).unwrap().contains("<svg"), "{chart}.svg");
+        let png = image::open(out.join(format!("{chart}.png"))).unwrap().to_rgb8();
+        assert!(png.pixels().any(|p| p.0 != [255, 255, 255]), "{chart}.png is blank");
+    }
+    // fig5 marks exactly one auto-chosen m per scene.
+    let fig5: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("fig5.json")).unwrap()).unwrap();
+    let autos = fig5.as_array().unwrap().iter().filter(|r| r["auto"] == true).count();
+    assert_eq!(autos, 2, "two procedural scenes, one auto m each");
+    fails(&["experiment", "fig5", "--scenes", "/nonexistent", "--out", s(&out)], "manifest.json");
+}
+
+#[test]
 fn demo_runs_and_checks_itself() {
     let out = ok(&["demo"]);
     assert!(out.contains("brute-force check: 2000 of 2000"), "{out}");

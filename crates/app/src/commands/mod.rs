@@ -3,6 +3,7 @@
 pub mod bench_trace;
 pub mod build;
 pub mod demo;
+pub mod experiment;
 pub mod generate;
 pub mod info;
 pub mod rays;

@@ -1,0 +1,258 @@
+//! `gridrt experiment fig5`: the survey's Figure 5, the impact of the resolution on scenes of
+//! different kinds. For each scene the flat grid's resolution is swept over the cost model's
+//! interval (guess-and-check's samples, m from the point model's to the line model's optimum);
+//! at each m we build, count N_m and memory, and time the same rays on the CPU (all threads) and
+//! the GPU. The cost model's T(m), scaled to the CPU times by least squares, is overlaid, with
+//! the auto-chosen m marked; the summary says how far the auto choice is from the measured
+//! optimum.
+//!
+//! Scenes: from `--scenes DIR` (its manifest.json kinds: the two largest scanned models, the
+//! largest architectural one, the particles and the slivers), else procedural stand-ins.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use glam::Vec3;
+use gridrt_gpu::Tracer;
+use gridrt_gpu::upload::GpuScene;
+use gridrt_grid::resolution::sample_curve;
+use gridrt_grid::{CostModel, InsertMode};
+use gridrt_scene::procedural::{self, SceneKind};
+use gridrt_scene::rays::{camera_rays, random_rays};
+use gridrt_scene::{Aabb, Camera};
+use serde::Serialize;
+
+use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
+use super::sweep::{Gpu, Point, measure};
+use crate::cli::ExperimentArgs;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub kind: String,
+    pub triangles: usize,
+    #[serde(flatten)]
+    pub point: Point,
+    /// The cost model's T(m) (its own units) and scaled to CPU nanoseconds per ray.
+    pub predicted_cost: f64,
+    pub predicted_cpu_ns: f64,
+    /// Guess-and-check picked this m.
+    pub auto: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub scene: String,
+    pub kind: String,
+    pub triangles: usize,
+    pub auto_m: f64,
+    pub best_cpu_m: f64,
+    /// Measured time at the auto m over the best measured time (1.0 = optimal).
+    pub auto_over_best_cpu: f64,
+    pub best_gpu_m: Option<f64>,
+    pub auto_over_best_gpu: Option<f64>,
+}
+
+/// A scene of the figure: name, kind, triangles, bounds.
+struct FigScene {
+    name: String,
+    kind: String,
+    tris: Vec<[Vec3; 3]>,
+    bounds: Aabb,
+}
+
+/// The shared scenes' folder when it exists next to the workspace or the current directory.
+pub fn default_scenes() -> Option<PathBuf> {
+    [PathBuf::from("../shared/scenes"), PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes"))]
+        .into_iter()
+        .find(|p| p.join("manifest.json").is_file())
+}
+
+fn from_manifest(dir: &Path, quick: bool) -> anyhow::Result<Vec<FigScene>> {
+    let text = std::fs::read_to_string(dir.join("manifest.json"))
+        .with_context(|| format!("reading {}/manifest.json", dir.display()))?;
+    let entries: Vec<serde_json::Value> = serde_json::from_str(&text).context("parsing manifest.json")?;
+    let mut picked = Vec::new();
+    for (kind, count) in [("scanned", 2), ("architectural", 1), ("particles", 1), ("slivers", 1)] {
+        let mut of_kind: Vec<&serde_json::Value> = entries.iter().filter(|e| e["kind"] == kind).collect();
+        // The largest ones (quick runs: the smallest, to stay quick).
+        of_kind.sort_by_key(|e| e["triangles"].as_u64().unwrap_or(0));
+        if !quick {
+            of_kind.reverse();
+        }
+        for e in of_kind.into_iter().take(if quick { 1 } else { count }) {
+            let file = e["file"].as_str().context("a manifest entry without a file")?;
+            let (mesh, _) = gridrt_scene::gltf_load::load_path(&dir.join(file))?;
+            picked.push(FigScene {
+                name: file.into(),
+                kind: kind.into(),
+                tris: mesh.triangles(),
+                bounds: mesh.bounds(),
+            });
+        }
+    }
+    anyhow::ensure!(
+        !picked.is_empty(),
+        "{}/manifest.json names no scanned/architectural/particles/slivers scene",
+        dir.display()
+    );
+    Ok(picked)
+}
+
+fn procedural_scenes(quick: bool) -> Vec<FigScene> {
+    let s = |k: SceneKind, size: u32, kind: &str| {
+        let g = procedural::generate(k, size, 1);
+        FigScene {
+            name: format!("{} (procedural)", k.name()),
+            kind: kind.into(),
+            tris: g.mesh.triangles(),
+            bounds: g.mesh.bounds(),
+        }
+    };
+    if quick {
+        return vec![s(SceneKind::Sphereflake, 1, "scanned-like"), s(SceneKind::Particles, 5_000, "particles")];
+    }
+    vec![
+        s(SceneKind::Sphereflake, 2, "scanned-like"),
+        s(SceneKind::Mountain, 8, "scanned-like"),
+        s(SceneKind::TeapotInStadium, 2, "architectural-like"),
+        s(SceneKind::Particles, 50_000, "particles"),
+        s(SceneKind::Slivers, 20_000, "slivers"),
+    ]
+}
+
+pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
+    let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
+    let scenes = match dir {
+        Some(dir) => from_manifest(&dir, args.quick)?,
+        None => procedural_scenes(args.quick),
+    };
+    let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
+    let tracer = Tracer::new();
+    let model = CostModel { samples: if args.quick { 6 } else { 16 }, ..CostModel::default() };
+    let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
+    let pb = progress((scenes.len() * model.samples as usize) as u64, "fig5");
+    let (mut rows, mut summary) = (Vec::new(), Vec::new());
+    for sc in &scenes {
+        pb.set_message(sc.name.clone());
+        // Half primary rays (from the auto camera), half random rays, as one set.
+        let mut rays = camera_rays(&Camera::fit(&sc.bounds, 4.0 / 3.0), rays_n / 2);
+        rays.extend(random_rays(&sc.bounds, rays_n - rays.len(), 3));
+        let gscene = match &ctx {
+            Some(c) => Some(GpuScene::new(c, &sc.tris)?),
+            None => None,
+        };
+        let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
+        let curve = sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true);
+        let auto = curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).expect("a sample").resolution;
+        let mut pts = Vec::new();
+        for s in &curve {
+            pts.push((measure(&sc.tris, s.resolution, &rays, gpu.as_ref(), 2)?, s.cost));
+            pb.inc(1);
+        }
+        pb.inc((model.samples as usize).saturating_sub(curve.len()) as u64);
+        // T(m) in CPU nanoseconds: the least-squares scale through the origin.
+        let scale =
+            pts.iter().map(|(p, c)| p.cpu_ns_per_ray * c).sum::<f64>() / pts.iter().map(|(_, c)| c * c).sum::<f64>();
+        let best_cpu = pts.iter().min_by(|a, b| a.0.cpu_ns_per_ray.total_cmp(&b.0.cpu_ns_per_ray)).expect("points");
+        let at_auto = pts.iter().find(|(p, _)| p.resolution == auto).expect("the auto m was measured");
+        let best_gpu = pts
+            .iter()
+            .filter(|(p, _)| p.gpu_ns_per_ray.is_some())
+            .min_by(|a, b| a.0.gpu_ns_per_ray.unwrap_or(0.0).total_cmp(&b.0.gpu_ns_per_ray.unwrap_or(0.0)));
+        summary.push(Summary {
+            scene: sc.name.clone(),
+            kind: sc.kind.clone(),
+            triangles: sc.tris.len(),
+            auto_m: at_auto.0.m,
+            best_cpu_m: best_cpu.0.m,
+            auto_over_best_cpu: at_auto.0.cpu_ns_per_ray / best_cpu.0.cpu_ns_per_ray,
+            best_gpu_m: best_gpu.map(|b| b.0.m),
+            auto_over_best_gpu: best_gpu.and_then(|b| Some(at_auto.0.gpu_ns_per_ray? / b.0.gpu_ns_per_ray?)),
+        });
+        let series_of = |label: &str, f: &dyn Fn(&Point, f64) -> Option<f64>, predicted: bool| Series {
+            label: label.into(),
+            points: pts.iter().filter_map(|(p, c)| f(p, *c).map(|y| (p.m, y))).collect(),
+            predicted,
+        };
+        let stem = sc.name.trim_end_matches(".glb").replace([' ', '(', ')'], "");
+        let mut time_series = vec![
+            series_of("CPU ns/ray (measured)", &|p, _| Some(p.cpu_ns_per_ray), false),
+            series_of("cost model T(m), scaled to CPU", &|_, c| Some(c * scale), true),
+        ];
+        if ctx.is_some() {
+            time_series.push(series_of("GPU ns/ray (measured)", &|p, _| p.gpu_ns_per_ray, false));
+        }
+        save_chart(
+            &args.out,
+            &format!("fig5-{stem}-time"),
+            &Chart {
+                title: format!("{} ({} triangles, {}): time per ray against m", sc.name, sc.tris.len(), sc.kind),
+                x_label: "m = cbrt(cells)".into(),
+                y_label: "ns per ray".into(),
+                log_x: true,
+                log_y: true,
+                series: time_series,
+                markers: vec![(at_auto.0.m, format!("auto m = {:.0}", at_auto.0.m))],
+            },
+        )?;
+        save_chart(
+            &args.out,
+            &format!("fig5-{stem}-size"),
+            &Chart {
+                title: format!("{}: references N_m and memory against m", sc.name),
+                x_label: "m = cbrt(cells)".into(),
+                y_label: "count / bytes".into(),
+                log_x: true,
+                log_y: true,
+                series: vec![
+                    series_of("N_m (references)", &|p, _| Some(p.n_m as f64), false),
+                    series_of("memory (bytes)", &|p, _| Some(p.memory_bytes as f64), false),
+                    series_of("cells", &|p, _| Some(p.cells as f64), true),
+                ],
+                markers: vec![(at_auto.0.m, format!("auto m = {:.0}", at_auto.0.m))],
+            },
+        )?;
+        rows.extend(pts.into_iter().map(|(p, c)| Row {
+            scene: sc.name.clone(),
+            kind: sc.kind.clone(),
+            triangles: sc.tris.len(),
+            auto: p.resolution == auto,
+            predicted_cpu_ns: c * scale,
+            predicted_cost: c,
+            point: p,
+        }));
+    }
+    pb.finish_and_clear();
+    write_rows(&args.out, "fig5", &rows)?;
+    write_rows(&args.out, "fig5-summary", &summary)?;
+    println!(
+        "Figure 5: flat grid, {} rays per point (half primary, half random), CPU {} threads{}:",
+        rays_n,
+        rayon::current_num_threads(),
+        ctx.as_ref().map_or(String::new(), |c| format!(", GPU {}", c.adapter_name()))
+    );
+    print_table(
+        &["scene", "kind", "N", "auto m", "best m (CPU)", "auto/best CPU", "best m (GPU)", "auto/best GPU"],
+        &summary
+            .iter()
+            .map(|s| {
+                vec![
+                    s.scene.clone(),
+                    s.kind.clone(),
+                    s.triangles.to_string(),
+                    format!("{:.0}", s.auto_m),
+                    format!("{:.0}", s.best_cpu_m),
+                    format!("{:.2}", s.auto_over_best_cpu),
+                    s.best_gpu_m.map_or("-".into(), |m| format!("{m:.0}")),
+                    s.auto_over_best_gpu.map_or("-".into(), |r| format!("{r:.2}")),
+                ]
+            })
+            .collect::<Vec<_>>(),
+    );
+    println!(
+        "wrote fig5.csv, fig5-summary.csv, .json and fig5-<scene>-{{time,size}}.svg/.png to {}",
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,156 @@
+//! `gridrt experiment models`: the resolution that is fastest in practice against the
+//! triangle count N, for point-like (particles) and line-like (slivers) scenes of growing N.
+//!
+//! The survey (§3.2, eqs. 1–2) derives the optimal number of cells M = O(N) for the point
+//! model and a much faster growth for the line model (it writes O(N^1.5)). For every N we sweep
+//! the resolution over a wide interval, trace random rays on the CPU and take the fastest m;
+//! then fit the log–log slope of the best cell count against N and compare. The cost model's
+//! own choice (guess-and-check) is reported next to the measured optimum.
+
+use glam::Vec3;
+use gridrt_grid::resolution::{choose, cubic_cells};
+use gridrt_grid::{CostModel, InsertMode, Resolution};
+use gridrt_scene::procedural;
+use gridrt_scene::rays::random_rays;
+use serde::Serialize;
+
+use super::report::{Chart, Series, fit_line, print_table, progress, save_chart, write_rows};
+use super::sweep::{Point, measure};
+use crate::cli::ExperimentArgs;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub model: &'static str,
+    pub n: usize,
+    #[serde(flatten)]
+    pub point: Point,
+    /// The fastest resolution of this N.
+    pub best: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub model: &'static str,
+    pub n: usize,
+    pub best_cells: u64,
+    pub best_ns_per_ray: f64,
+    /// Guess-and-check's choice with the survey's constants.
+    pub cost_model_cells: u64,
+    /// Its measured time relative to the best (1.0 = optimal).
+    pub cost_model_time_ratio: f64,
+}
+
+fn scene(model: &str, n: usize) -> (Vec<[Vec3; 3]>, gridrt_scene::Aabb) {
+    let mesh = match model {
+        "point (particles)" => procedural::particles(n, 1),
+        _ => procedural::slivers(n, 1),
+    };
+    (mesh.triangles(), mesh.bounds())
+}
+
+pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
+    let ns: Vec<usize> = if args.quick { vec![2_000, 8_000] } else { vec![4_000, 16_000, 64_000, 256_000] };
+    let rays_n = if args.quick { args.rays.min(5_000) } else { args.rays };
+    let samples = if args.quick { 6 } else { 12 };
+    let models = ["point (particles)", "line (slivers)"];
+    let cost = CostModel::default();
+    let pb = progress((models.len() * ns.len() * (samples + 1)) as u64, "models");
+    let (mut rows, mut summary) = (Vec::new(), Vec::new());
+    for model in models {
+        for &n in &ns {
+            let (tris, bounds) = scene(model, n);
+            let rays = random_rays(&bounds, rays_n, 7);
+            // Cells from N/8 to min(8·N^1.5, the memory cap): wide enough for both models.
+            let lo = n as f64 / 8.0;
+            let hi = (8.0 * (n as f64).powf(1.5)).min(cost.cell_cap(n) as f64).max(lo * 2.0);
+            let mut points: Vec<Point> = Vec::new();
+            for i in 0..samples {
+                let cells = lo * (hi / lo).powf(i as f64 / (samples - 1) as f64);
+                let res = cubic_cells(&bounds, cells);
+                if !points.iter().any(|p| p.resolution == res) {
+                    points.push(measure(&tris, res, &rays, None, 2)?);
+                }
+                pb.inc(1);
+            }
+            let chosen = choose(&tris, &bounds, Resolution::Auto, &cost, InsertMode::BoundingBox, true);
+            let at_choice = measure(&tris, chosen.resolution, &rays, None, 2)?;
+            pb.inc(1);
+            let best = points.iter().min_by(|a, b| a.cpu_ns_per_ray.total_cmp(&b.cpu_ns_per_ray)).expect("points");
+            summary.push(Summary {
+                model,
+                n,
+                best_cells: best.cells,
+                best_ns_per_ray: best.cpu_ns_per_ray,
+                cost_model_cells: at_choice.cells,
+                cost_model_time_ratio: at_choice.cpu_ns_per_ray / best.cpu_ns_per_ray,
+            });
+            let best_res = best.resolution;
+            rows.extend(points.into_iter().map(|p| Row { model, n, best: p.resolution == best_res, point: p }));
+        }
+    }
+    pb.finish_and_clear();
+    write_rows(&args.out, "models", &rows)?;
+    write_rows(&args.out, "models-summary", &summary)?;
+
+    let mut series = Vec::new();
+    let mut slopes = Vec::new();
+    for model in models {
+        let pts: Vec<(f64, f64)> =
+            summary.iter().filter(|s| s.model == model).map(|s| (s.n as f64, s.best_cells as f64)).collect();
+        let logs: Vec<(f64, f64)> = pts.iter().map(|p| (p.0.ln(), p.1.ln())).collect();
+        slopes.push((model, fit_line(&logs).map(|f| f.0)));
+        series.push(Series { label: format!("{model}: fastest cells"), points: pts, predicted: false });
+        series.push(Series {
+            label: format!("{model}: cost model's cells"),
+            points: summary
+                .iter()
+                .filter(|s| s.model == model)
+                .map(|s| (s.n as f64, s.cost_model_cells as f64))
+                .collect(),
+            predicted: true,
+        });
+    }
+    save_chart(
+        &args.out,
+        "models",
+        &Chart {
+            title: "Fastest resolution against N (CPU, random rays)".into(),
+            x_label: "triangles N".into(),
+            y_label: "cells M".into(),
+            log_x: true,
+            log_y: true,
+            series,
+            markers: vec![],
+        },
+    )?;
+    println!("Fastest flat-grid resolution against N ({rays_n} random rays, CPU):");
+    print_table(
+        &["model", "N", "best cells", "cells/N", "ns/ray", "cost-model cells", "its time / best"],
+        &summary
+            .iter()
+            .map(|s| {
+                vec![
+                    s.model.to_string(),
+                    s.n.to_string(),
+                    s.best_cells.to_string(),
+                    format!("{:.2}", s.best_cells as f64 / s.n as f64),
+                    format!("{:.0}", s.best_ns_per_ray),
+                    s.cost_model_cells.to_string(),
+                    format!("{:.2}", s.cost_model_time_ratio),
+                ]
+            })
+            .collect::<Vec<_>>(),
+    );
+    for (model, slope) in slopes {
+        let claim = if model.starts_with("point") { 1.0 } else { 1.5 };
+        match slope {
+            Some(k) => println!(
+                "{model}: best cells ∝ N^{k:.2} (survey: N^{claim}){}",
+                if (k - claim).abs() > 0.25 { " — our data disagrees" } else { "" }
+            ),
+            None => println!("{model}: too few sizes for a slope"),
+        }
+    }
+    println!("wrote models.csv, models-summary.csv, .json, models.svg, .png to {}", args.out.display());
+    Ok(())
+}

@@ -1,0 +1,91 @@
+//! One point of a resolution sweep: a flat grid at a given resolution, built and traced on the
+//! CPU (all threads) and, when a device is given, on the GPU, timed best-of-`repeat`.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_gpu::{GpuContext, Tracer};
+use gridrt_grid::trace::TraceOptions;
+use gridrt_grid::{GridConfig, GridKind, Resolution, Traversal, structure};
+use gridrt_scene::Ray;
+use serde::Serialize;
+
+/// The GPU side of a sweep (scene uploaded once).
+#[derive(Debug)]
+pub struct Gpu<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a GpuScene,
+    pub tracer: &'a Tracer,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Point {
+    /// ∛cells (the survey's m).
+    pub m: f64,
+    pub resolution: [u32; 3],
+    pub cells: u64,
+    /// Triangle references N_m.
+    pub n_m: u64,
+    pub memory_bytes: u64,
+    pub build_ms: f64,
+    /// Nanoseconds per ray, CPU (all threads) and GPU, over all the ray sets given.
+    pub cpu_ns_per_ray: f64,
+    pub gpu_ns_per_ray: Option<f64>,
+    pub mean_cells_per_ray: f64,
+    pub mean_tests_per_ray: f64,
+}
+
+fn best_of(repeat: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
+    let mut best = f64::INFINITY;
+    for _ in 0..repeat.max(1) {
+        let s = Instant::now();
+        f()?;
+        best = best.min(s.elapsed().as_secs_f64());
+    }
+    Ok(best)
+}
+
+/// Builds a flat grid at `res` and times tracing `rays`.
+pub fn measure(
+    tris: &[[Vec3; 3]],
+    res: [u32; 3],
+    rays: &[Ray],
+    gpu: Option<&Gpu>,
+    repeat: usize,
+) -> anyhow::Result<Point> {
+    let cfg = GridConfig { kind: GridKind::Flat, resolution: Some(Resolution::Explicit(res)), ..GridConfig::default() };
+    let (grid, report) = structure::build(tris, &cfg)?;
+    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let (_, stats) = grid.trace_batch(tris, rays, opts, true);
+    let cpu_s = best_of(repeat, || {
+        grid.trace_batch(tris, rays, opts, true);
+        Ok(())
+    })?;
+    let gpu_s = match gpu {
+        Some(g) => {
+            let gs = GpuStructure::new(g.ctx, &grid)?;
+            // One untimed warm-up (pipeline creation, first upload).
+            g.tracer.trace(g.ctx, g.scene, &gs, &rays[..rays.len().min(64)], opts.traversal, true)?;
+            Some(best_of(repeat, || {
+                g.tracer.trace(g.ctx, g.scene, &gs, rays, opts.traversal, true)?;
+                Ok(())
+            })?)
+        }
+        None => None,
+    };
+    let n = rays.len().max(1) as f64;
+    let cells = report.stats.cells;
+    Ok(Point {
+        m: (cells as f64).cbrt(),
+        resolution: res,
+        cells,
+        n_m: report.stats.refs,
+        memory_bytes: report.stats.memory_bytes,
+        build_ms: report.times.total(),
+        cpu_ns_per_ray: cpu_s * 1e9 / n,
+        gpu_ns_per_ray: gpu_s.map(|s| s * 1e9 / n),
+        mean_cells_per_ray: stats.cells as f64 / n,
+        mean_tests_per_ray: stats.tests as f64 / n,
+    })
+}
