@@ -364,7 +364,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 pub struct ExperimentArgs {
     /// Which experiment: fig5 (time, N_m and memory against m per scene kind, with the cost
     /// model), bresenham (cells a naive Bresenham misses), models (fastest m against N for
-    /// point- and line-like scenes).
+    /// point- and line-like scenes), hierarchy (the five structures side by side).
     #[arg(value_enum)]
     pub name: ExperimentName,
     /// Folder of .glb scenes with a manifest.json giving each file's kind (fig5; default:
@@ -394,6 +394,7 @@ pub enum ExperimentName {
     Fig5,
     Bresenham,
     Models,
+    Hierarchy,
 }
 
 #[derive(Debug, Args)]

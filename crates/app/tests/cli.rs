@@ -135,7 +135,12 @@ fn help_on_everything_and_default_scene() {
 #[test]
 fn experiments_write_rows_and_charts() {
     let out = tmp("experiments");
-    for (name, extra) in [("bresenham", &[][..]), ("models", &[][..]), ("fig5", &["--procedural"][..])] {
+    for (name, extra) in [
+        ("bresenham", &[][..]),
+        ("models", &[][..]),
+        ("fig5", &["--procedural"][..]),
+        ("hierarchy", &["--procedural"][..]),
+    ] {
         let mut args = vec!["experiment", name, "--quick", "--out", s(&out)];
         args.extend_from_slice(extra);
         let text = ok(&args);
@@ -146,7 +151,14 @@ fn experiments_write_rows_and_charts() {
             serde_json::from_str(&std::fs::read_to_string(out.join(format!("{name}.json"))).unwrap()).unwrap();
         assert!(json.as_array().is_some_and(|a| !a.is_empty()), "{name}.json");
     }
-    for chart in ["bresenham", "models", "fig5-sphereflakeprocedural-time", "fig5-particlesprocedural-size"] {
+    for chart in [
+        "bresenham",
+        "models",
+        "fig5-sphereflakeprocedural-time",
+        "fig5-particlesprocedural-size",
+        "hierarchy-cpu-mrays",
+        "hierarchy-gpu-mrays",
+    ] {
         assert!(std::fs::read_to_string(out.join(format!("{chart}.svg"))).unwrap().contains("<svg"), "{chart}.svg");
         let png = image::open(out.join(format!("{chart}.png"))).unwrap().to_rgb8();
         assert!(png.pixels().any(|p| p.0 != [255, 255, 255]), "{chart}.png is blank");
@@ -156,6 +168,11 @@ fn experiments_write_rows_and_charts() {
         serde_json::from_str(&std::fs::read_to_string(out.join("fig5.json")).unwrap()).unwrap();
     let autos = fig5.as_array().unwrap().iter().filter(|r| r["auto"] == true).count();
     assert_eq!(autos, 2, "two procedural scenes, one auto m each");
+    let hier: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("hierarchy.json")).unwrap()).unwrap();
+    let rows = hier.as_array().unwrap();
+    assert_eq!(rows.len(), 10, "2 scenes × 5 structures");
+    assert!(rows.iter().all(|r| r["cpu_mrays_s"].as_f64().unwrap() > 0.0 && r["gpu_mrays_s"].as_f64().unwrap() > 0.0));
     fails(&["experiment", "fig5", "--scenes", "/nonexistent", "--out", s(&out)], "manifest.json");
 }
 

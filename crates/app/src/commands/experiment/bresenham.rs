@@ -145,6 +145,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 },
             ],
             markers: vec![],
+            x_names: None,
         },
     )?;
     println!(

@@ -54,11 +54,11 @@ pub struct Summary {
 }
 
 /// A scene of the figure: name, kind, triangles, bounds.
-struct FigScene {
-    name: String,
-    kind: String,
-    tris: Vec<[Vec3; 3]>,
-    bounds: Aabb,
+pub struct FigScene {
+    pub name: String,
+    pub kind: String,
+    pub tris: Vec<[Vec3; 3]>,
+    pub bounds: Aabb,
 }
 
 /// The shared scenes' folder when it exists next to the workspace or the current directory.
@@ -68,7 +68,7 @@ pub fn default_scenes() -> Option<PathBuf> {
         .find(|p| p.join("manifest.json").is_file())
 }
 
-fn from_manifest(dir: &Path, quick: bool) -> anyhow::Result<Vec<FigScene>> {
+pub fn from_manifest(dir: &Path, quick: bool) -> anyhow::Result<Vec<FigScene>> {
     let text = std::fs::read_to_string(dir.join("manifest.json"))
         .with_context(|| format!("reading {}/manifest.json", dir.display()))?;
     let entries: Vec<serde_json::Value> = serde_json::from_str(&text).context("parsing manifest.json")?;
@@ -99,7 +99,7 @@ fn from_manifest(dir: &Path, quick: bool) -> anyhow::Result<Vec<FigScene>> {
     Ok(picked)
 }
 
-fn procedural_scenes(quick: bool) -> Vec<FigScene> {
+pub fn procedural_scenes(quick: bool) -> Vec<FigScene> {
     let s = |k: SceneKind, size: u32, kind: &str| {
         let g = procedural::generate(k, size, 1);
         FigScene {
@@ -194,6 +194,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 log_y: true,
                 series: time_series,
                 markers: vec![(at_auto.0.m, format!("auto m = {:.0}", at_auto.0.m))],
+                x_names: None,
             },
         )?;
         save_chart(
@@ -211,6 +212,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                     series_of("cells", &|p, _| Some(p.cells as f64), true),
                 ],
                 markers: vec![(at_auto.0.m, format!("auto m = {:.0}", at_auto.0.m))],
+                x_names: None,
             },
         )?;
         rows.extend(pts.into_iter().map(|(p, c)| Row {

@@ -4,6 +4,7 @@
 
 pub mod bresenham;
 pub mod fig5;
+pub mod hierarchy;
 pub mod models;
 pub mod report;
 pub mod sweep;
@@ -16,5 +17,6 @@ pub fn run(args: ExperimentArgs) -> anyhow::Result<()> {
         ExperimentName::Fig5 => fig5::run(&args),
         ExperimentName::Bresenham => bresenham::run(&args),
         ExperimentName::Models => models::run(&args),
+        ExperimentName::Hierarchy => hierarchy::run(&args),
     }
 }

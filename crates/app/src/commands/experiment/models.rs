@@ -121,6 +121,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
             log_y: true,
             series,
             markers: vec![],
+            x_names: None,
         },
     )?;
     println!("Fastest flat-grid resolution against N ({rays_n} random rays, CPU):");

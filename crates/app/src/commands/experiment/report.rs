@@ -69,6 +69,8 @@ pub struct Chart {
     pub series: Vec<Series>,
     /// Vertical markers: x and label (e.g. the auto-chosen m).
     pub markers: Vec<(f64, String)>,
+    /// Names for integer x values (categories such as scenes), instead of numbers.
+    pub x_names: Option<Vec<String>>,
 }
 
 /// Colours that stay apart on white (no yellow).
@@ -120,7 +122,8 @@ where
     anyhow::ensure!(!pts.is_empty(), "chart \"{}\" has no points", c.title);
     let (mut x0, mut x1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(p.0), a.1.max(p.0)));
     let (mut y0, mut y1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(p.1), a.1.max(p.1)));
-    if x1 - x0 < 1e-9 {
+    if x1 - x0 < 1e-9 || c.x_names.is_some() {
+        // Categories get half a slot of room on each side for their labels.
         (x0, x1) = (x0 - 0.5, x1 + 0.5);
     }
     if y1 - y0 < 1e-9 {
@@ -139,7 +142,11 @@ where
         .configure_mesh()
         .x_desc(&c.x_label)
         .y_desc(&c.y_label)
-        .x_label_formatter(&|v| tick(*v, c.log_x))
+        .x_label_formatter(&|v| match &c.x_names {
+            Some(names) if (v - v.round()).abs() < 1e-6 => names.get(v.round() as usize).cloned().unwrap_or_default(),
+            Some(_) => String::new(),
+            None => tick(*v, c.log_x),
+        })
         .y_label_formatter(&|v| tick(*v, c.log_y))
         .draw()
         .map_err(err)?;
@@ -154,6 +161,15 @@ where
         let style = ShapeStyle { color, filled: false, stroke_width: 2 };
         if s.predicted {
             chart.draw_series(DashedLineSeries::new(data, 6, 4, style)).map_err(err)?
+        } else if c.x_names.is_some() {
+            // Categories: marks only (a line between scenes would mean nothing), each series
+            // shifted a little so equal values stay visible side by side.
+            let filled = ShapeStyle { filled: true, ..style };
+            let shift = (i as f64 - (c.series.len() as f64 - 1.0) / 2.0) * 0.6 / c.series.len().max(1) as f64;
+            let data: Vec<(f64, f64)> = data.into_iter().map(|(x, y)| (x + shift, y)).collect();
+            chart
+                .draw_series(PointSeries::of_element(data, 6, filled, &|p, r, st| Circle::new(p, r, st)))
+                .map_err(err)?
         } else {
             let marks = data.clone();
             chart
@@ -251,6 +267,7 @@ mod tests {
                 Series { label: "b".into(), points: vec![(10.0, 2.0), (100.0, 1.0)], predicted: true },
             ],
             markers: vec![(30.0, "auto".into())],
+            x_names: None,
         };
         save_chart(&dir, "c", &c).unwrap();
         let svg = std::fs::read_to_string(dir.join("c.svg")).unwrap();

@@ -55,7 +55,20 @@ pub fn measure(
     repeat: usize,
 ) -> anyhow::Result<Point> {
     let cfg = GridConfig { kind: GridKind::Flat, resolution: Some(Resolution::Explicit(res)), ..GridConfig::default() };
-    let (grid, report) = structure::build(tris, &cfg)?;
+    measure_config(tris, &cfg, rays, gpu, repeat)
+}
+
+/// Builds `cfg` and times tracing `rays` (m, cells and N_m are those of the top/flat grid's
+/// resolution and of the whole structure).
+pub fn measure_config(
+    tris: &[[Vec3; 3]],
+    cfg: &GridConfig,
+    rays: &[Ray],
+    gpu: Option<&Gpu>,
+    repeat: usize,
+) -> anyhow::Result<Point> {
+    let (grid, report) = structure::build(tris, cfg)?;
+    let res = report.stats.resolution;
     let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
     let (_, stats) = grid.trace_batch(tris, rays, opts, true);
     let cpu_s = best_of(repeat, || {
