@@ -125,15 +125,17 @@ pub struct GridArgs {
     /// Build on one thread (the result is identical to the parallel build).
     #[arg(long)]
     pub serial: bool,
-    /// Cost model Tsetup (survey §3.2).
-    #[arg(long, default_value_t = CostModel::default().t_setup)]
-    pub t_setup: f64,
-    /// Cost model Tstep.
-    #[arg(long, default_value_t = CostModel::default().t_step)]
-    pub t_step: f64,
-    /// Cost model Tinter.
-    #[arg(long, default_value_t = CostModel::default().t_inter)]
-    pub t_inter: f64,
+    /// Cost model Tsetup (survey §3.2). Without any of --t-setup/--t-step/--t-inter, the
+    /// calibration saved by `gridrt experiment cost-constants --save` is used when it exists,
+    /// else the survey's 1.0, 0.1, 0.5.
+    #[arg(long)]
+    pub t_setup: Option<f64>,
+    /// Cost model Tstep (default 0.1, or the calibration's).
+    #[arg(long)]
+    pub t_step: Option<f64>,
+    /// Cost model Tinter (default 0.5, or the calibration's).
+    #[arg(long)]
+    pub t_inter: Option<f64>,
     /// Number of resolutions sampled by guess-and-check.
     #[arg(long, default_value_t = CostModel::default().samples)]
     pub samples: u32,
@@ -173,13 +175,29 @@ fn parse_resolution(s: &str) -> Result<Resolution, String> {
 #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
 impl GridArgs {
     pub fn cost_model(&self) -> anyhow::Result<CostModel> {
-        let m = CostModel {
-            t_setup: self.t_setup,
-            t_step: self.t_step,
-            t_inter: self.t_inter,
+        let d = CostModel::default();
+        let mut m = CostModel {
+            t_setup: self.t_setup.unwrap_or(d.t_setup),
+            t_step: self.t_step.unwrap_or(d.t_step),
+            t_inter: self.t_inter.unwrap_or(d.t_inter),
             samples: self.samples,
-            ..CostModel::default()
+            ..d
         };
+        #[cfg(not(target_arch = "wasm32"))]
+        if self.t_setup.is_none()
+            && self.t_step.is_none()
+            && self.t_inter.is_none()
+            && let Some((path, c)) = crate::commands::experiment::cost_constants::load_calibration()
+        {
+            eprintln!(
+                "cost model: calibrated constants from {} (Tsetup {:.2}, Tstep {:.3}, Tinter {:.3} ns)",
+                path.display(),
+                c.cpu.t_setup,
+                c.cpu.t_step,
+                c.cpu.t_inter
+            );
+            (m.t_setup, m.t_step, m.t_inter) = (c.cpu.t_setup, c.cpu.t_step, c.cpu.t_inter);
+        }
         anyhow::ensure!(
             m.t_setup >= 0.0 && m.t_step > 0.0 && m.t_inter > 0.0 && m.t_step.is_finite() && m.t_inter.is_finite(),
             "cost constants must be finite, Tstep and Tinter positive"
@@ -364,7 +382,8 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 pub struct ExperimentArgs {
     /// Which experiment: fig5 (time, N_m and memory against m per scene kind, with the cost
     /// model), bresenham (cells a naive Bresenham misses), models (fastest m against N for
-    /// point- and line-like scenes), hierarchy (the five structures side by side).
+    /// point- and line-like scenes), hierarchy (the five structures side by side),
+    /// cost-constants (Tsetup, Tstep, Tinter fitted on this machine).
     #[arg(value_enum)]
     pub name: ExperimentName,
     /// Folder of .glb scenes with a manifest.json giving each file's kind (fig5; default:
@@ -386,6 +405,10 @@ pub struct ExperimentArgs {
     /// fig5: use the procedural stand-in scenes even when a scenes folder exists.
     #[arg(long, conflicts_with = "scenes")]
     pub procedural: bool,
+    /// cost-constants: save the fitted CPU constants as the calibration the command line's
+    /// auto resolution uses ($GRIDRT_CALIBRATION, else ~/.config/gridrt/cost-constants.json).
+    #[arg(long)]
+    pub save: bool,
 }
 
 /// The experiments of `gridrt experiment`.
@@ -395,6 +418,7 @@ pub enum ExperimentName {
     Bresenham,
     Models,
     Hierarchy,
+    CostConstants,
 }
 
 #[derive(Debug, Args)]

@@ -4,8 +4,15 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// The binary, without any machine calibration of the cost model (tests stay hermetic).
+fn gridrt_cmd() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_gridrt"));
+    c.env("GRIDRT_CALIBRATION", "/nonexistent/gridrt-calibration.json");
+    c
+}
+
 fn gridrt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gridrt")).args(args).output().expect("running gridrt")
+    gridrt_cmd().args(args).output().expect("running gridrt")
 }
 
 fn ok(args: &[&str]) -> String {
@@ -174,6 +181,29 @@ fn experiments_write_rows_and_charts() {
     assert_eq!(rows.len(), 10, "2 scenes × 5 structures");
     assert!(rows.iter().all(|r| r["cpu_mrays_s"].as_f64().unwrap() > 0.0 && r["gpu_mrays_s"].as_f64().unwrap() > 0.0));
     fails(&["experiment", "fig5", "--scenes", "/nonexistent", "--out", s(&out)], "manifest.json");
+
+    // cost-constants: a fit, and with --save a calibration that auto resolution then uses.
+    let cal = out.join("calibration.json");
+    let o = gridrt_cmd()
+        .args(["experiment", "cost-constants", "--quick", "--procedural", "--save", "--out", s(&out)])
+        .env("GRIDRT_CALIBRATION", &cal)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fit: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
+    for k in ["t_setup", "t_step", "t_inter", "rel_rms_error", "r_squared"] {
+        assert!(fit["cpu"][k].as_f64().is_some_and(f64::is_finite), "cpu.{k}: {fit}");
+    }
+    let o = gridrt_cmd().args(["build", "@default"]).env("GRIDRT_CALIBRATION", &cal).output().unwrap();
+    assert!(o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("calibrated constants"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o =
+        gridrt_cmd().args(["build", "@default", "--t-step", "0.2"]).env("GRIDRT_CALIBRATION", &cal).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("calibrated"), "explicit constants win");
 }
 
 #[test]
@@ -309,7 +339,7 @@ fn app_screenshots_under_xvfb() {
     let shot = |grid: &str, view: &str| -> image::RgbaImage {
         let png = out_dir.join(format!("app-{grid}-{view}.png"));
         let _ = std::fs::remove_file(&png);
-        let out = Command::new(env!("CARGO_BIN_EXE_gridrt"))
+        let out = gridrt_cmd()
             // Inside the stadium, close to the knot: the walls are far behind it.
             .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--grid", grid, "--view", view])
             .args(["--camera", "0.25,0.18,0.35,0,0,0,50", "--render-scale", "0.5"])
@@ -343,7 +373,7 @@ fn app_screenshots_under_xvfb() {
 
     // The cost-model window's measurement: a flat grid timed at every sampled resolution.
     let png = out_dir.join("app-cost-model.png");
-    let out = Command::new(env!("CARGO_BIN_EXE_gridrt"))
+    let out = gridrt_cmd()
         .args(["--screenshot", s(&png), "--frames", "1", "--measure", "--render-scale", "0.3", "--open", "explainer"])
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")
@@ -363,7 +393,7 @@ fn app_screenshots_under_xvfb() {
     // A scene that does not load: the app says why and exits non-zero.
     let bad = tmp("app-bad.glb");
     std::fs::write(&bad, b"glTF\x02\x00\x00\x00 not really").unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_gridrt"))
+    let out = gridrt_cmd()
         .args([s(&bad), "--screenshot", s(&out_dir.join("app-bad.png")), "--frames", "1"])
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")

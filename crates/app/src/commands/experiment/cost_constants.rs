@@ -1,0 +1,351 @@
+//! `gridrt experiment cost-constants`: Tsetup, Tstep and Tinter of T = Tsetup + m·Tstep +
+//! μ·Tinter measured on this machine, for the CPU and the GPU backends.
+//!
+//! Each scene is traced with flat grids at several resolutions and with every other structure,
+//! which spreads the per-ray cells visited (m) and triangle tests (μ) widely. A least-squares
+//! fit of nanoseconds per ray against (1, cells/ray, tests/ray) gives the constants; the fit's
+//! error (relative RMS residual and R²) says how well the survey's model explains the times.
+//! A CPU micro-benchmark (cells stepped through an empty grid, triangle tests against one
+//! triangle) is reported beside the fit.
+//!
+//! `--save` stores the CPU constants in the calibration file ([`calibration_path`]); the
+//! command line's auto resolution then uses them instead of the survey's defaults.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use glam::{UVec3, Vec3};
+use gridrt_gpu::Tracer;
+use gridrt_gpu::upload::GpuScene;
+use gridrt_grid::geometry::GridRay;
+use gridrt_grid::resolution::sample_curve;
+use gridrt_grid::traversal::{Traversal, Walker};
+use gridrt_grid::triangle::{PreparedRay, intersect};
+use gridrt_grid::{CostModel, GridConfig, GridKind, InsertMode, Resolution};
+use gridrt_scene::Camera;
+use gridrt_scene::rays::{camera_rays, random_rays};
+use gridrt_scene::rng::Rng;
+use serde::{Deserialize, Serialize};
+
+use super::fig5::{default_scenes, from_manifest, procedural_scenes};
+use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
+use super::sweep::{Gpu, measure_config};
+use crate::cli::ExperimentArgs;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub config: String,
+    pub cells_per_ray: f64,
+    pub tests_per_ray: f64,
+    pub cpu_ns_per_ray: f64,
+    pub gpu_ns_per_ray: Option<f64>,
+}
+
+/// Fitted constants in nanoseconds per ray, and how well they fit.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Fit {
+    pub t_setup: f64,
+    pub t_step: f64,
+    pub t_inter: f64,
+    /// RMS of (predicted − measured) / measured.
+    pub rel_rms_error: f64,
+    pub r_squared: f64,
+    pub points: usize,
+}
+
+/// What the calibration file holds.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Calibration {
+    pub cpu: Fit,
+    pub gpu: Option<Fit>,
+    pub machine: String,
+    pub date: String,
+}
+
+/// Where `--save` writes the calibration and where the command line looks for it:
+/// `$GRIDRT_CALIBRATION`, else `$XDG_CONFIG_HOME/gridrt/cost-constants.json`, else
+/// `~/.config/gridrt/cost-constants.json`.
+pub fn calibration_path() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("GRIDRT_CALIBRATION") {
+        return Some(PathBuf::from(p));
+    }
+    let base = std::env::var_os("XDG_CONFIG_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".config")))?;
+    Some(base.join("gridrt/cost-constants.json"))
+}
+
+/// The saved CPU constants, if a calibration file exists and is valid.
+pub fn load_calibration() -> Option<(PathBuf, Calibration)> {
+    let path = calibration_path()?;
+    let text = std::fs::read_to_string(&path).ok()?;
+    match serde_json::from_str::<Calibration>(&text) {
+        Ok(c) if c.cpu.t_step > 0.0 && c.cpu.t_inter > 0.0 && c.cpu.t_setup >= 0.0 => Some((path, c)),
+        _ => {
+            log::warn!("ignoring {}: not a valid gridrt calibration", path.display());
+            None
+        }
+    }
+}
+
+/// Least squares of y = a + b·x1 + c·x2 (normal equations, Gaussian elimination).
+pub fn fit3(points: &[(f64, f64, f64)]) -> Option<Fit> {
+    if points.len() < 3 {
+        return None;
+    }
+    let mut m = [[0.0f64; 4]; 3];
+    for &(x1, x2, y) in points {
+        let v = [1.0, x1, x2];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += v[i] * v[j];
+            }
+            m[i][3] += v[i] * y;
+        }
+    }
+    for col in 0..3 {
+        let pivot = (col..3).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
+        if m[pivot][col].abs() < 1e-12 {
+            return None;
+        }
+        m.swap(col, pivot);
+        let pivot_row = m[col];
+        for (row, r) in m.iter_mut().enumerate() {
+            if row != col {
+                let f = r[col] / pivot_row[col];
+                for (x, p) in r.iter_mut().zip(pivot_row).skip(col) {
+                    *x -= f * p;
+                }
+            }
+        }
+    }
+    let (a, b, c) = (m[0][3] / m[0][0], m[1][3] / m[1][1], m[2][3] / m[2][2]);
+    let mean = points.iter().map(|p| p.2).sum::<f64>() / points.len() as f64;
+    let (mut ss_res, mut ss_tot, mut rel) = (0.0, 0.0, 0.0);
+    for &(x1, x2, y) in points {
+        let e = a + b * x1 + c * x2 - y;
+        ss_res += e * e;
+        ss_tot += (y - mean) * (y - mean);
+        rel += (e / y.max(1e-12)).powi(2);
+    }
+    Some(Fit {
+        t_setup: a,
+        t_step: b,
+        t_inter: c,
+        rel_rms_error: (rel / points.len() as f64).sqrt(),
+        r_squared: if ss_tot > 0.0 { 1.0 - ss_res / ss_tot } else { 1.0 },
+        points: points.len(),
+    })
+}
+
+/// CPU micro-benchmark: ns per cell stepped (AW through an empty 256³ grid) and per triangle
+/// test (the watertight test of the closest-hit loop against one triangle).
+fn micro_cpu() -> (f64, f64) {
+    let res = UVec3::splat(256);
+    let mut rng = Rng::new(11);
+    let rays: Vec<GridRay> = (0..20_000)
+        .filter_map(|_| {
+            let o = Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 256.0;
+            GridRay::clipped(o, rng.unit_vector(), res, 0.0, f32::INFINITY)
+        })
+        .collect();
+    let s = Instant::now();
+    let steps: usize = rays.iter().map(|r| Walker::new(Traversal::AmanatidesWoo, r, res).count()).sum();
+    let step_ns = s.elapsed().as_secs_f64() * 1e9 / steps.max(1) as f64;
+    let tri = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+    let prays: Vec<gridrt_scene::Ray> = (0..200_000)
+        .map(|_| {
+            let o = Vec3::new(rng.range(-1.5, 1.5), rng.range(-1.5, 1.5), -2.0);
+            gridrt_scene::Ray::new(o, Vec3::Z, 0.0, f32::INFINITY)
+        })
+        .collect();
+    let prepared: Vec<PreparedRay> = prays.iter().filter_map(PreparedRay::new).collect();
+    let s = Instant::now();
+    let mut hits = 0usize;
+    for pr in &prepared {
+        hits += usize::from(intersect(pr, &tri).is_some());
+    }
+    let test_ns = s.elapsed().as_secs_f64() * 1e9 / prepared.len().max(1) as f64;
+    std::hint::black_box(hits);
+    (step_ns, test_ns)
+}
+
+pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
+    let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
+    let scenes = match dir {
+        Some(dir) => from_manifest(&dir, args.quick)?,
+        None => procedural_scenes(args.quick),
+    };
+    let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
+    let tracer = Tracer::new();
+    let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
+    let flat_samples = if args.quick { 3 } else { 6 };
+    let pb = progress((scenes.len() * (flat_samples + 4)) as u64, "constants");
+    let mut rows = Vec::new();
+    for sc in &scenes {
+        pb.set_message(sc.name.clone());
+        let mut rays = camera_rays(&Camera::fit(&sc.bounds, 4.0 / 3.0), rays_n / 2);
+        rays.extend(random_rays(&sc.bounds, rays_n - rays.len(), 5));
+        let gscene = match &ctx {
+            Some(c) => Some(GpuScene::new(c, &sc.tris)?),
+            None => None,
+        };
+        let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
+        let model = CostModel { samples: flat_samples as u32, ..CostModel::default() };
+        let mut configs: Vec<(String, GridConfig)> =
+            sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true)
+                .iter()
+                .map(|s| {
+                    let r = s.resolution;
+                    (
+                        format!("flat {}x{}x{}", r[0], r[1], r[2]),
+                        GridConfig {
+                            kind: GridKind::Flat,
+                            resolution: Some(Resolution::Explicit(r)),
+                            ..GridConfig::default()
+                        },
+                    )
+                })
+                .collect();
+        configs.extend(
+            GridKind::ALL
+                .into_iter()
+                .filter(|k| *k != GridKind::Flat)
+                .map(|k| (k.name().to_string(), GridConfig { kind: k, ..GridConfig::default() })),
+        );
+        for (name, cfg) in configs {
+            let p = measure_config(&sc.tris, &cfg, &rays, gpu.as_ref(), 2)?;
+            rows.push(Row {
+                scene: sc.name.clone(),
+                config: name,
+                cells_per_ray: p.mean_cells_per_ray,
+                tests_per_ray: p.mean_tests_per_ray,
+                cpu_ns_per_ray: p.cpu_ns_per_ray,
+                gpu_ns_per_ray: p.gpu_ns_per_ray,
+            });
+            pb.inc(1);
+        }
+    }
+    pb.finish_and_clear();
+    let cpu_pts: Vec<(f64, f64, f64)> =
+        rows.iter().map(|r| (r.cells_per_ray, r.tests_per_ray, r.cpu_ns_per_ray)).collect();
+    let gpu_pts: Vec<(f64, f64, f64)> =
+        rows.iter().filter_map(|r| Some((r.cells_per_ray, r.tests_per_ray, r.gpu_ns_per_ray?))).collect();
+    let cpu = fit3(&cpu_pts).ok_or_else(|| anyhow::anyhow!("the CPU measurements do not determine three constants"))?;
+    let gpu = fit3(&gpu_pts);
+    let (step_ns, test_ns) = micro_cpu();
+    write_rows(&args.out, "cost-constants", &rows)?;
+    let calibration = Calibration {
+        cpu,
+        gpu,
+        machine: format!(
+            "{} CPU threads{}",
+            rayon::current_num_threads(),
+            ctx.as_ref().map_or(String::new(), |c| format!(", GPU {}", c.adapter_name()))
+        ),
+        date: crate::format::today(),
+    };
+    std::fs::write(args.out.join("cost-constants-fit.json"), serde_json::to_string_pretty(&calibration)?)?;
+    let scatter = |label: &str, pts: &[(f64, f64, f64)], f: &Fit| Series {
+        label: label.into(),
+        points: pts.iter().map(|&(c, t, y)| (f.t_setup + f.t_step * c + f.t_inter * t, y)).collect(),
+        predicted: false,
+    };
+    let mut series = vec![scatter("CPU", &cpu_pts, &cpu)];
+    if let Some(g) = &gpu {
+        series.push(scatter("GPU", &gpu_pts, g));
+    }
+    let all: Vec<f64> =
+        series.iter().flat_map(|s| s.points.iter().flat_map(|p| [p.0, p.1])).filter(|v| *v > 0.0).collect();
+    let (lo, hi) = all.iter().fold((f64::MAX, 0.0f64), |a, &v| (a.0.min(v), a.1.max(v)));
+    series.push(Series { label: "measured = predicted".into(), points: vec![(lo, lo), (hi, hi)], predicted: true });
+    save_chart(
+        &args.out,
+        "cost-constants",
+        &Chart {
+            title: "Measured against fitted time per ray".into(),
+            x_label: "fitted Tsetup + m·Tstep + μ·Tinter (ns)".into(),
+            y_label: "measured ns per ray".into(),
+            log_x: true,
+            log_y: true,
+            series,
+            markers: vec![],
+            x_names: None,
+        },
+    )?;
+    println!(
+        "Cost constants fitted to {} configurations ({} rays each, half primary, half random):",
+        rows.len(),
+        rays_n
+    );
+    let line = |name: &str, f: &Fit| {
+        vec![
+            name.to_string(),
+            format!("{:.1}", f.t_setup),
+            format!("{:.2}", f.t_step),
+            format!("{:.2}", f.t_inter),
+            format!("{:.2}", f.t_inter / f.t_step),
+            format!("{:.1}%", 100.0 * f.rel_rms_error),
+            format!("{:.3}", f.r_squared),
+        ]
+    };
+    let mut table = vec![line("CPU (fit)", &cpu)];
+    if let Some(g) = &gpu {
+        table.push(line("GPU (fit)", g));
+    }
+    let d = CostModel::default();
+    table.push(vec![
+        "survey".into(),
+        format!("{}", d.t_setup),
+        format!("{}", d.t_step),
+        format!("{}", d.t_inter),
+        format!("{:.2}", d.t_inter / d.t_step),
+        "-".into(),
+        "-".into(),
+    ]);
+    print_table(&["backend", "Tsetup ns", "Tstep ns", "Tinter ns", "Tinter/Tstep", "rel. RMS error", "R²"], &table);
+    println!(
+        "CPU micro-benchmark, one thread: {step_ns:.2} ns per cell step (empty 256³ grid), {test_ns:.2} ns per triangle test \
+         (ratio {:.2}). The fit's constants are wall time per ray with all threads and absorb what the model \
+         leaves out (descending hierarchies, mailboxes, cache misses).",
+        test_ns / step_ns
+    );
+    if args.save {
+        let path =
+            calibration_path().ok_or_else(|| anyhow::anyhow!("no HOME or XDG_CONFIG_HOME for the calibration file"))?;
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        std::fs::write(&path, serde_json::to_string_pretty(&calibration)?)?;
+        println!(
+            "saved the calibration to {} (auto resolution on the command line now uses the CPU constants)",
+            path.display()
+        );
+    }
+    println!("wrote cost-constants.csv, .json, cost-constants-fit.json, .svg, .png to {}", args.out.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fit_recovers_known_constants() {
+        let pts: Vec<(f64, f64, f64)> = (0..30)
+            .map(|i| {
+                let (c, t) = (1.0 + (i * 7 % 13) as f64, 0.5 + (i * 5 % 11) as f64);
+                (c, t, 20.0 + 3.0 * c + 9.0 * t)
+            })
+            .collect();
+        let f = fit3(&pts).unwrap();
+        assert!(
+            (f.t_setup - 20.0).abs() < 1e-6 && (f.t_step - 3.0).abs() < 1e-9 && (f.t_inter - 9.0).abs() < 1e-9,
+            "{f:?}"
+        );
+        assert!(f.rel_rms_error < 1e-9 && (f.r_squared - 1.0).abs() < 1e-9);
+        // Collinear inputs do not determine three constants.
+        assert!(fit3(&[(1.0, 2.0, 3.0), (2.0, 4.0, 5.0), (3.0, 6.0, 7.0)]).is_none());
+    }
+}
