@@ -5,7 +5,8 @@
 //! which spreads the per-ray cells visited (m) and triangle tests (μ) widely. A least-squares
 //! fit of nanoseconds per ray against (1, cells/ray, tests/ray) gives the constants; the fit's
 //! error (relative RMS residual and R²) says how well the survey's model explains the times.
-//! A CPU micro-benchmark (cells stepped through an empty grid, triangle tests against one
+//! The fit keeps every constant non-negative (a negative time has no meaning). A CPU
+//! micro-benchmark (cells stepped through an empty grid, triangle tests against one
 //! triangle) is reported beside the fit.
 //!
 //! `--save` stores the CPU constants in the calibration file ([`calibration_path`]); the
@@ -89,38 +90,58 @@ pub fn load_calibration() -> Option<(PathBuf, Calibration)> {
     }
 }
 
-/// Least squares of y = a + b·x1 + c·x2 (normal equations, Gaussian elimination).
-pub fn fit3(points: &[(f64, f64, f64)]) -> Option<Fit> {
-    if points.len() < 3 {
-        return None;
-    }
-    let mut m = [[0.0f64; 4]; 3];
+/// Solves the least-squares problem restricted to the coefficients in `active` (the others are
+/// 0): returns the full coefficient vector, or `None` if singular.
+fn lsq_subset(points: &[(f64, f64, f64)], active: &[usize]) -> Option<[f64; 3]> {
+    let k = active.len();
+    let mut m = vec![vec![0.0f64; k + 1]; k];
     for &(x1, x2, y) in points {
         let v = [1.0, x1, x2];
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] += v[i] * v[j];
+        for i in 0..k {
+            for j in 0..k {
+                m[i][j] += v[active[i]] * v[active[j]];
             }
-            m[i][3] += v[i] * y;
+            m[i][k] += v[active[i]] * y;
         }
     }
-    for col in 0..3 {
-        let pivot = (col..3).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
+    for col in 0..k {
+        let pivot = (col..k).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
         if m[pivot][col].abs() < 1e-12 {
             return None;
         }
         m.swap(col, pivot);
-        let pivot_row = m[col];
+        let pivot_row = m[col].clone();
         for (row, r) in m.iter_mut().enumerate() {
             if row != col {
                 let f = r[col] / pivot_row[col];
-                for (x, p) in r.iter_mut().zip(pivot_row).skip(col) {
+                for (x, p) in r.iter_mut().zip(&pivot_row).skip(col) {
                     *x -= f * p;
                 }
             }
         }
     }
-    let (a, b, c) = (m[0][3] / m[0][0], m[1][3] / m[1][1], m[2][3] / m[2][2]);
+    let mut out = [0.0; 3];
+    for (i, &a) in active.iter().enumerate() {
+        out[a] = m[i][k] / m[i][i];
+    }
+    Some(out)
+}
+
+/// Least squares of y = a + b·x1 + c·x2 with a, b, c ≥ 0 (times cannot be negative): the best
+/// of the fits over every subset of free coefficients whose coefficients are all non-negative.
+pub fn fit3(points: &[(f64, f64, f64)]) -> Option<Fit> {
+    if points.len() < 3 {
+        return None;
+    }
+    let sse = |c: &[f64; 3]| points.iter().map(|&(x1, x2, y)| (c[0] + c[1] * x1 + c[2] * x2 - y).powi(2)).sum::<f64>();
+    let subsets: [&[usize]; 7] = [&[0, 1, 2], &[1, 2], &[0, 1], &[0, 2], &[1], &[2], &[0]];
+    // The unconstrained fit must be determined, else the data cannot separate the constants.
+    lsq_subset(points, &[0, 1, 2])?;
+    let [a, b, c] = subsets
+        .iter()
+        .filter_map(|s| lsq_subset(points, s))
+        .filter(|c| c.iter().all(|&v| v >= 0.0))
+        .min_by(|x, y| sse(x).total_cmp(&sse(y)))?;
     let mean = points.iter().map(|p| p.2).sum::<f64>() / points.len() as f64;
     let (mut ss_res, mut ss_tot, mut rel) = (0.0, 0.0, 0.0);
     for &(x1, x2, y) in points {
@@ -345,6 +366,10 @@ mod tests {
             "{f:?}"
         );
         assert!(f.rel_rms_error < 1e-9 && (f.r_squared - 1.0).abs() < 1e-9);
+        // A negative intercept is not a time: the fit keeps Tsetup at 0 and refits the rest.
+        let neg: Vec<(f64, f64, f64)> = pts.iter().map(|&(c, t, y)| (c, t, y - 25.0)).collect();
+        let g = fit3(&neg).unwrap();
+        assert!(g.t_setup == 0.0 && g.t_step > 0.0 && g.t_inter > 0.0, "{g:?}");
         // Collinear inputs do not determine three constants.
         assert!(fit3(&[(1.0, 2.0, 3.0), (2.0, 4.0, 5.0), (3.0, 6.0, 7.0)]).is_none());
     }
