@@ -23,12 +23,10 @@ use gridrt_grid::resolution::sample_curve;
 use gridrt_grid::traversal::{Traversal, Walker};
 use gridrt_grid::triangle::{PreparedRay, intersect};
 use gridrt_grid::{CostModel, GridConfig, GridKind, InsertMode, Resolution};
-use gridrt_scene::Camera;
-use gridrt_scene::rays::{camera_rays, random_rays};
 use gridrt_scene::rng::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::fig5::{default_scenes, from_manifest, procedural_scenes};
+use super::fig5::{mixed_rays, pick_scenes};
 use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use super::sweep::{Gpu, measure_config};
 use crate::cli::ExperimentArgs;
@@ -193,11 +191,7 @@ fn micro_cpu() -> (f64, f64) {
 }
 
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
-    let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
-    let scenes = match dir {
-        Some(dir) => from_manifest(&dir, args.quick)?,
-        None => procedural_scenes(args.quick),
-    };
+    let scenes = pick_scenes(args)?;
     let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
     let tracer = Tracer::new();
     let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
@@ -206,8 +200,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let mut rows = Vec::new();
     for sc in &scenes {
         pb.set_message(sc.name.clone());
-        let mut rays = camera_rays(&Camera::fit(&sc.bounds, 4.0 / 3.0), rays_n / 2);
-        rays.extend(random_rays(&sc.bounds, rays_n - rays.len(), 5));
+        let rays = mixed_rays(&sc.bounds, rays_n, 5);
         let gscene = match &ctx {
             Some(c) => Some(GpuScene::new(c, &sc.tris)?),
             None => None,

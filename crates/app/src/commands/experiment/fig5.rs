@@ -121,12 +121,25 @@ pub fn procedural_scenes(quick: bool) -> Vec<FigScene> {
     ]
 }
 
-pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
+/// The scenes an experiment runs on: `--scenes`' manifest (default ../shared/scenes), or the
+/// procedural stand-ins without one or with `--procedural`.
+pub fn pick_scenes(args: &ExperimentArgs) -> anyhow::Result<Vec<FigScene>> {
     let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
-    let scenes = match dir {
+    Ok(match dir {
         Some(dir) => from_manifest(&dir, args.quick)?,
         None => procedural_scenes(args.quick),
-    };
+    })
+}
+
+/// The rays of a scene's measurements: half primary (from the auto camera), half random.
+pub fn mixed_rays(bounds: &Aabb, count: usize, seed: u64) -> Vec<gridrt_scene::Ray> {
+    let mut rays = camera_rays(&Camera::fit(bounds, 4.0 / 3.0), count / 2);
+    rays.extend(random_rays(bounds, count - rays.len(), seed));
+    rays
+}
+
+pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
+    let scenes = pick_scenes(args)?;
     let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
     let tracer = Tracer::new();
     let model = CostModel { samples: if args.quick { 6 } else { 16 }, ..CostModel::default() };
@@ -136,8 +149,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     for sc in &scenes {
         pb.set_message(sc.name.clone());
         // Half primary rays (from the auto camera), half random rays, as one set.
-        let mut rays = camera_rays(&Camera::fit(&sc.bounds, 4.0 / 3.0), rays_n / 2);
-        rays.extend(random_rays(&sc.bounds, rays_n - rays.len(), 3));
+        let rays = mixed_rays(&sc.bounds, rays_n, 3);
         let gscene = match &ctx {
             Some(c) => Some(GpuScene::new(c, &sc.tris)?),
             None => None,
