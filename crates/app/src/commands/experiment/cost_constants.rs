@@ -17,7 +17,6 @@ use std::time::Instant;
 
 use glam::{UVec3, Vec3};
 use gridrt_gpu::Tracer;
-use gridrt_gpu::upload::GpuScene;
 use gridrt_grid::geometry::GridRay;
 use gridrt_grid::resolution::sample_curve;
 use gridrt_grid::traversal::{Traversal, Walker};
@@ -28,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use super::fig5::{mixed_rays, pick_scenes};
 use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use super::sweep::{Gpu, measure_config};
+use super::sweep::{Gpu, machine, measure_config, upload};
 use crate::cli::ExperimentArgs;
 
 #[derive(Clone, Debug, Serialize)]
@@ -201,10 +200,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     for sc in &scenes {
         pb.set_message(sc.name.clone());
         let rays = mixed_rays(&sc.bounds, rays_n, 5);
-        let gscene = match &ctx {
-            Some(c) => Some(GpuScene::new(c, &sc.tris)?),
-            None => None,
-        };
+        let gscene = upload(ctx.as_ref(), &sc.tris)?;
         let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
         let model = CostModel { samples: flat_samples as u32, ..CostModel::default() };
         let mut configs: Vec<(String, GridConfig)> =
@@ -250,16 +246,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let gpu = fit3(&gpu_pts);
     let (step_ns, test_ns) = micro_cpu();
     write_rows(&args.out, "cost-constants", &rows)?;
-    let calibration = Calibration {
-        cpu,
-        gpu,
-        machine: format!(
-            "{} CPU threads{}",
-            rayon::current_num_threads(),
-            ctx.as_ref().map_or(String::new(), |c| format!(", GPU {}", c.adapter_name()))
-        ),
-        date: crate::format::today(),
-    };
+    let calibration = Calibration { cpu, gpu, machine: machine(ctx.as_ref()), date: crate::format::today() };
     std::fs::write(args.out.join("cost-constants-fit.json"), serde_json::to_string_pretty(&calibration)?)?;
     let scatter = |label: &str, pts: &[(f64, f64, f64)], f: &Fit| Series {
         label: label.into(),

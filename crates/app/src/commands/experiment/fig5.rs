@@ -14,7 +14,6 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use glam::Vec3;
 use gridrt_gpu::Tracer;
-use gridrt_gpu::upload::GpuScene;
 use gridrt_grid::resolution::sample_curve;
 use gridrt_grid::{CostModel, InsertMode};
 use gridrt_scene::procedural::{self, SceneKind};
@@ -23,7 +22,7 @@ use gridrt_scene::{Aabb, Camera};
 use serde::Serialize;
 
 use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use super::sweep::{Gpu, Point, measure};
+use super::sweep::{Gpu, Point, machine, measure, upload};
 use crate::cli::ExperimentArgs;
 
 #[derive(Clone, Debug, Serialize)]
@@ -150,10 +149,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         pb.set_message(sc.name.clone());
         // Half primary rays (from the auto camera), half random rays, as one set.
         let rays = mixed_rays(&sc.bounds, rays_n, 3);
-        let gscene = match &ctx {
-            Some(c) => Some(GpuScene::new(c, &sc.tris)?),
-            None => None,
-        };
+        let gscene = upload(ctx.as_ref(), &sc.tris)?;
         let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
         let curve = sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true);
         let auto = curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).expect("a sample").resolution;
@@ -240,12 +236,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     pb.finish_and_clear();
     write_rows(&args.out, "fig5", &rows)?;
     write_rows(&args.out, "fig5-summary", &summary)?;
-    println!(
-        "Figure 5: flat grid, {} rays per point (half primary, half random), CPU {} threads{}:",
-        rays_n,
-        rayon::current_num_threads(),
-        ctx.as_ref().map_or(String::new(), |c| format!(", GPU {}", c.adapter_name()))
-    );
+    println!("Figure 5: flat grid, {} rays per point (half primary, half random), {}:", rays_n, machine(ctx.as_ref()));
     print_table(
         &["scene", "kind", "N", "auto m", "best m (CPU)", "auto/best CPU", "best m (GPU)", "auto/best GPU"],
         &summary

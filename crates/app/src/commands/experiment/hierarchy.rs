@@ -3,13 +3,12 @@
 //! Mrays/s on the CPU (all threads) and the GPU, on the same rays (half primary, half random).
 
 use gridrt_gpu::Tracer;
-use gridrt_gpu::upload::GpuScene;
 use gridrt_grid::{GridConfig, GridKind};
 use serde::Serialize;
 
 use super::fig5::{mixed_rays, pick_scenes};
 use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use super::sweep::{Gpu, measure_config};
+use super::sweep::{Gpu, machine, measure_config, upload};
 use crate::cli::ExperimentArgs;
 
 #[derive(Clone, Debug, Serialize)]
@@ -40,10 +39,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     for sc in &scenes {
         pb.set_message(sc.name.clone());
         let rays = mixed_rays(&sc.bounds, rays_n, 3);
-        let gscene = match &ctx {
-            Some(c) => Some(GpuScene::new(c, &sc.tris)?),
-            None => None,
-        };
+        let gscene = upload(ctx.as_ref(), &sc.tris)?;
         let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
         for kind in GridKind::ALL {
             let cfg = GridConfig { kind, ..GridConfig::default() };
@@ -102,12 +98,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         };
         save_chart(&args.out, &format!("hierarchy-{stem}"), &chart)?;
     }
-    println!(
-        "Structures compared, {} rays per scene (half primary, half random), CPU {} threads{}:",
-        rays_n,
-        rayon::current_num_threads(),
-        ctx.as_ref().map_or(String::new(), |c| format!(", GPU {}", c.adapter_name()))
-    );
+    println!("Structures compared, {} rays per scene (half primary, half random), {}:", rays_n, machine(ctx.as_ref()));
     print_table(
         &["scene", "grid", "build ms", "B/tri", "cells/ray", "tests/ray", "CPU Mrays/s", "GPU Mrays/s"],
         &rows

@@ -46,6 +46,20 @@ fn best_of(repeat: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow::
     Ok(best)
 }
 
+/// The scene on the device when there is one (each experiment uploads once per scene).
+pub fn upload(ctx: Option<&GpuContext>, tris: &[[Vec3; 3]]) -> anyhow::Result<Option<GpuScene>> {
+    Ok(match ctx {
+        Some(c) => Some(GpuScene::new(c, tris)?),
+        None => None,
+    })
+}
+
+/// "CPU n threads[, GPU adapter]": what a measurement ran on.
+pub fn machine(ctx: Option<&GpuContext>) -> String {
+    let gpu = ctx.map_or(String::new(), |c| format!(", GPU {}", c.adapter_name()));
+    format!("CPU {} threads{gpu}", rayon::current_num_threads())
+}
+
 /// Builds a flat grid at `res` and times tracing `rays`.
 pub fn measure(
     tris: &[[Vec3; 3]],
