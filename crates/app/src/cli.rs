@@ -89,6 +89,9 @@ pub enum Command {
     BenchTrace(BenchTraceArgs),
     /// Run one of the survey's experiments: CSV/JSON rows, SVG/PNG charts and a table.
     Experiment(ExperimentArgs),
+    /// Every grid kind against the `bvh` and `obvhs` BVHs on the same scenes and rays: build
+    /// time, memory, Mrays/s, build time against N, the auto resolution, and the targets.
+    Bench(BenchArgs),
     /// Build and trace the embedded default scene on the CPU, check against brute force, print a summary.
     Demo,
 }
@@ -419,6 +422,47 @@ pub enum ExperimentName {
     Models,
     Hierarchy,
     CostConstants,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Folder of .glb scenes (every scene of its manifest.json, else every .glb/.gltf in it;
+    /// default: ../shared/scenes when present, else procedural stand-ins).
+    #[arg(long)]
+    pub scenes: Option<PathBuf>,
+    /// Use the procedural stand-in scenes even when a scenes folder exists.
+    #[arg(long, conflicts_with = "scenes")]
+    pub procedural: bool,
+    /// Rays per set (camera rays and random rays, each).
+    #[arg(long, default_value_t = 250_000)]
+    pub rays: usize,
+    /// Repetitions of every build and trace (the best is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeat: u32,
+    /// Output folder for the CSV, JSON, SVG and PNG files.
+    #[arg(long, default_value = "out/bench")]
+    pub out: PathBuf,
+    /// Print everything as one JSON document on stdout instead of tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Skip the GPU columns.
+    #[arg(long)]
+    pub no_gpu: bool,
+    /// Skip the bvh/obvhs rows.
+    #[arg(long)]
+    pub no_peers: bool,
+    /// Skip build time against N.
+    #[arg(long)]
+    pub no_scaling: bool,
+    /// Largest triangle count of the scaling run (at least 1.6M).
+    #[arg(long, default_value_t = 2_400_000)]
+    pub scaling_max: usize,
+    /// Skip the sweep around the auto resolution.
+    #[arg(long)]
+    pub no_auto_check: bool,
+    /// Two scenes, fewer rays, small scaling sizes (a smoke run).
+    #[arg(long)]
+    pub quick: bool,
 }
 
 #[derive(Debug, Args)]

@@ -27,6 +27,7 @@ fn main() -> anyhow::Result<()> {
         Some(cli::Command::Render(a)) => commands::render::run(a),
         Some(cli::Command::BenchTrace(a)) => commands::bench_trace::run(a),
         Some(cli::Command::Experiment(a)) => commands::experiment::run(a),
+        Some(cli::Command::Bench(a)) => commands::bench::run(a),
     }
 }
 

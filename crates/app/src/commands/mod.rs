@@ -1,5 +1,6 @@
 //! One module per subcommand, plus the helpers they share.
 
+pub mod bench;
 pub mod bench_trace;
 pub mod build;
 pub mod demo;

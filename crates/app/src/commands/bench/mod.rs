@@ -1,0 +1,484 @@
+//! `gridrt bench`: every grid kind against the BVHs users would pick instead, in one run, on
+//! the same meshes and the same ray sets (camera rays from the auto camera and random rays in
+//! the bounds): build time, memory per triangle and Mrays/s (CPU, all threads; the GPU too for
+//! the grids). Then build time against triangle count (procedural particles, 100k to ≥ 2M), a
+//! check of the auto resolution against a sweep around it, and the targets as ratios
+//! from this one run. Benchmarks print numbers; nothing here asserts a speed.
+//!
+//! Every structure's hits are compared with the flat grid's on every ray: a benchmark of wrong
+//! answers is worthless, so disagreements are counted and printed.
+
+#[cfg(feature = "peers")]
+pub mod peers;
+pub mod scaling;
+pub mod targets;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_gpu::{GpuContext, Tracer};
+use gridrt_grid::trace::TraceOptions;
+use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, Resolution, Traversal, structure};
+use gridrt_scene::rays::{camera_rays, random_rays};
+use gridrt_scene::{Camera, Hit, Ray};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::experiment::fig5::{FigScene, default_scenes, procedural_scenes};
+use super::experiment::report::{Chart, Series, print_table, progress, save_chart, write_rows};
+use super::experiment::sweep::machine;
+use crate::cli::BenchArgs;
+
+/// One structure on one scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub kind: String,
+    pub triangles: usize,
+    /// A grid kind's name, or a peer configuration's.
+    pub structure: String,
+    /// "grid" or "peer".
+    pub family: &'static str,
+    /// Best wall-clock build over the repetitions (auto resolution included for grids).
+    pub build_ms: f64,
+    pub memory_bytes: u64,
+    pub bytes_per_triangle: f64,
+    pub primary_mrays_s: f64,
+    pub random_mrays_s: f64,
+    pub gpu_primary_mrays_s: Option<f64>,
+    pub gpu_random_mrays_s: Option<f64>,
+    /// Whether the build ran on all threads.
+    pub parallel_build: bool,
+    /// Whether it intersects triangles with the grids' watertight test (else its own).
+    pub shared_triangle_test: bool,
+    /// Rays (both sets) whose hit differs from the flat grid's: another triangle not within
+    /// 1e-5 relative t, or hit vs miss.
+    pub mismatches: u64,
+}
+
+/// A structure under test: a grid kind or (with the `peers` feature) a peer configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Subject {
+    Grid(GridKind),
+    #[cfg(feature = "peers")]
+    Peer(peers::PeerKind),
+}
+
+impl Subject {
+    pub fn all(with_peers: bool) -> Vec<Subject> {
+        let mut v: Vec<Subject> = GridKind::ALL.iter().map(|&k| Subject::Grid(k)).collect();
+        #[cfg(feature = "peers")]
+        if with_peers {
+            v.extend(peers::PeerKind::ALL.iter().map(|&p| Subject::Peer(p)));
+        }
+        let _ = with_peers;
+        v
+    }
+    pub fn parallel_build(self) -> bool {
+        match self {
+            Subject::Grid(_) => true,
+            #[cfg(feature = "peers")]
+            Subject::Peer(p) => p.parallel_build(),
+        }
+    }
+    pub fn shared_test(self) -> bool {
+        match self {
+            Subject::Grid(_) => true,
+            #[cfg(feature = "peers")]
+            Subject::Peer(p) => p.shared_test(),
+        }
+    }
+    pub fn name(self) -> String {
+        match self {
+            Subject::Grid(k) => k.name().to_string(),
+            #[cfg(feature = "peers")]
+            Subject::Peer(p) => p.name().to_string(),
+        }
+    }
+}
+
+/// Best wall-clock seconds of `repeat` runs of `f`, and the last result.
+pub fn best_of<T>(repeat: u32, mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut best = f64::INFINITY;
+    let mut out = None;
+    for _ in 0..repeat.max(1) {
+        let s = Instant::now();
+        let r = f();
+        best = best.min(s.elapsed().as_secs_f64());
+        out = Some(r);
+    }
+    (best, out.expect("at least one run"))
+}
+
+/// The cost model the command line's auto resolution uses: the saved calibration when there is
+/// one, else the survey's constants; and a note saying which.
+pub fn cost_model() -> (CostModel, String) {
+    let mut m = CostModel::default();
+    match super::experiment::cost_constants::load_calibration() {
+        Some((path, c)) => {
+            (m.t_setup, m.t_step, m.t_inter) = (c.cpu.t_setup, c.cpu.t_step, c.cpu.t_inter);
+            (m, format!("calibrated constants from {}", path.display()))
+        }
+        None => (m, "the survey's constants (Tsetup 1.0, Tstep 0.1, Tinter 0.5)".into()),
+    }
+}
+
+/// Whether two closest hits agree: the same triangle, or both hits within 1e-5 relative t
+/// (a near-tie between triangles), or both misses.
+pub fn agree(a: &Hit, b: &Hit) -> bool {
+    match (a.is_hit(), b.is_hit()) {
+        (false, false) => true,
+        (true, true) => a.triangle == b.triangle || (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(b.t.abs()),
+        _ => false,
+    }
+}
+
+/// The scenes: every scene of `--scenes`' manifest (default ../shared/scenes), or every
+/// .glb/.gltf in the folder without a manifest, or the procedural stand-ins.
+fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<FigScene>> {
+    let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
+    let Some(dir) = dir else { return Ok(procedural_scenes(args.quick)) };
+    let manifest: Vec<serde_json::Value> = match std::fs::read_to_string(dir.join("manifest.json")) {
+        Ok(text) => serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}/manifest.json: {e}", dir.display()))?,
+        Err(_) => Vec::new(),
+    };
+    let mut files: Vec<(String, String)> = manifest
+        .iter()
+        .filter_map(|e| Some((e["file"].as_str()?.to_string(), e["kind"].as_str().unwrap_or("unknown").to_string())))
+        .collect();
+    if files.is_empty() {
+        for entry in std::fs::read_dir(&dir).map_err(|e| anyhow::anyhow!("reading {}: {e}", dir.display()))? {
+            let name = entry?.file_name().to_string_lossy().into_owned();
+            if name.ends_with(".glb") || name.ends_with(".gltf") {
+                files.push((name, "unknown".into()));
+            }
+        }
+    }
+    files.sort();
+    let mut scenes = Vec::new();
+    for (file, kind) in files {
+        let (mesh, _) = gridrt_scene::gltf_load::load_path(&dir.join(&file))?;
+        let tris = mesh.triangles();
+        if tris.is_empty() {
+            eprintln!("bench: skipping {file}: no triangles");
+            continue;
+        }
+        scenes.push(FigScene { name: file, kind, bounds: mesh.bounds(), tris });
+    }
+    scenes.sort_by_key(|s| s.tris.len());
+    if args.quick {
+        scenes.truncate(2);
+    }
+    anyhow::ensure!(!scenes.is_empty(), "no scenes with triangles in {}", dir.display());
+    Ok(scenes)
+}
+
+/// The two ray sets of a scene.
+pub fn ray_sets(sc: &FigScene, count: usize) -> [(&'static str, Vec<Ray>); 2] {
+    [
+        ("primary", camera_rays(&Camera::fit(&sc.bounds, 4.0 / 3.0), count)),
+        ("random", random_rays(&sc.bounds, count, 7)),
+    ]
+}
+
+#[cfg(feature = "peers")]
+fn par_trace(rays: &[Ray], one: impl Fn(&Ray) -> Hit + Sync) -> Vec<Hit> {
+    rays.par_chunks(1024).flat_map_iter(|c| c.iter().map(&one).collect::<Vec<_>>()).collect()
+}
+
+/// A built subject, ready to trace.
+enum Built {
+    Grid(AnyGrid, u64),
+    #[cfg(feature = "peers")]
+    Peer(peers::PeerBvh),
+}
+
+fn build(subject: Subject, tris: &[[Vec3; 3]], cost: &CostModel) -> anyhow::Result<Built> {
+    Ok(match subject {
+        Subject::Grid(kind) => {
+            let cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
+            let (g, report) = structure::build(tris, &cfg)?;
+            Built::Grid(g, report.stats.memory_bytes)
+        }
+        #[cfg(feature = "peers")]
+        Subject::Peer(p) => Built::Peer(peers::build(p, tris)),
+    })
+}
+
+impl Built {
+    fn memory_bytes(&self) -> u64 {
+        match self {
+            Built::Grid(_, m) => *m,
+            #[cfg(feature = "peers")]
+            Built::Peer(p) => p.memory_bytes(),
+        }
+    }
+    fn trace(&self, tris: &[[Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
+        match self {
+            Built::Grid(g, _) => {
+                let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+                g.trace_batch(tris, rays, opts, true).0
+            }
+            #[cfg(feature = "peers")]
+            Built::Peer(p) => par_trace(rays, |r| p.trace(tris, r)),
+        }
+    }
+}
+
+/// Measures every subject on one scene.
+fn bench_scene(
+    sc: &FigScene,
+    args: &BenchArgs,
+    cost: &CostModel,
+    gpu: Option<&GpuContext>,
+    pb: &indicatif::ProgressBar,
+) -> anyhow::Result<Vec<Row>> {
+    let sets = ray_sets(sc, if args.quick { args.rays.min(20_000) } else { args.rays });
+    let tracer = Tracer::new();
+    let gscene = match gpu {
+        Some(ctx) => Some(GpuScene::new(ctx, &sc.tris)?),
+        None => None,
+    };
+    let mut reference: Option<[Vec<Hit>; 2]> = None;
+    let mut rows = Vec::new();
+    for subject in Subject::all(!args.no_peers) {
+        pb.set_message(format!("{} · {}", sc.name, subject.name()));
+        let (build_s, built) = best_of(args.repeat, || build(subject, &sc.tris, cost));
+        let built = built?;
+        let mut mrays = [0.0; 2];
+        let mut gpu_mrays = [None, None];
+        let mut hits: [Vec<Hit>; 2] = Default::default();
+        for (i, (_, rays)) in sets.iter().enumerate() {
+            let (s, h) = best_of(args.repeat, || built.trace(&sc.tris, rays));
+            mrays[i] = rays.len() as f64 / s / 1e6;
+            hits[i] = h;
+            if let (Built::Grid(g, _), Some(ctx), Some(scene)) = (&built, gpu, gscene.as_ref()) {
+                let gs = GpuStructure::new(ctx, g)?;
+                // Untimed warm-up: pipeline creation and first upload.
+                tracer.trace(ctx, scene, &gs, &rays[..rays.len().min(64)], Traversal::AmanatidesWoo, true)?;
+                let (s, r) =
+                    best_of(args.repeat, || tracer.trace(ctx, scene, &gs, rays, Traversal::AmanatidesWoo, true));
+                r?;
+                gpu_mrays[i] = Some(rays.len() as f64 / s / 1e6);
+            }
+        }
+        let reference = reference.get_or_insert_with(|| hits.clone());
+        let mismatches =
+            (0..2).map(|i| reference[i].iter().zip(&hits[i]).filter(|(a, b)| !agree(a, b)).count() as u64).sum();
+        let memory = built.memory_bytes();
+        rows.push(Row {
+            scene: sc.name.clone(),
+            kind: sc.kind.clone(),
+            triangles: sc.tris.len(),
+            structure: subject.name(),
+            family: if matches!(subject, Subject::Grid(_)) { "grid" } else { "peer" },
+            build_ms: build_s * 1e3,
+            memory_bytes: memory,
+            bytes_per_triangle: memory as f64 / sc.tris.len() as f64,
+            primary_mrays_s: mrays[0],
+            random_mrays_s: mrays[1],
+            gpu_primary_mrays_s: gpu_mrays[0],
+            gpu_random_mrays_s: gpu_mrays[1],
+            parallel_build: subject.parallel_build(),
+            shared_triangle_test: subject.shared_test(),
+            mismatches,
+        });
+        pb.inc(1);
+    }
+    Ok(rows)
+}
+
+/// One point of the auto-resolution check: the flat grid at a multiple of the auto m.
+#[derive(Clone, Debug, Serialize)]
+pub struct AutoPoint {
+    pub scene: String,
+    pub triangles: usize,
+    /// The multiple of the auto resolution (1 = the auto choice).
+    pub factor: f64,
+    pub resolution: [u32; 3],
+    pub m: f64,
+    pub cpu_ns_per_ray: f64,
+}
+
+/// Sweeps the flat grid's resolution from half to twice the auto choice (factors 2^(k/4)) and
+/// times both ray sets on the CPU.
+fn auto_check(sc: &FigScene, args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<AutoPoint>> {
+    let sets = ray_sets(sc, if args.quick { args.rays.min(20_000) } else { args.rays });
+    let rays: Vec<Ray> = sets.into_iter().flat_map(|(_, r)| r).collect();
+    let cfg = GridConfig { cost: *cost, ..GridConfig::default() };
+    let auto = structure::build(&sc.tris, &cfg)?.1.stats.resolution;
+    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let mut out = Vec::new();
+    for k in -4i32..=4 {
+        let f = 2f64.powf(k as f64 / 4.0);
+        let res = auto.map(|a| ((a as f64 * f).round() as u32).max(1));
+        let cfg = GridConfig { resolution: Some(Resolution::Explicit(res)), ..cfg };
+        let g = match structure::build(&sc.tris, &cfg) {
+            Ok((g, _)) => g,
+            // Finer grids can exceed the reference limit: that point is simply not measured.
+            Err(e) => {
+                log::info!("auto check: {}: {res:?} skipped: {e}", sc.name);
+                continue;
+            }
+        };
+        let (s, _) = best_of(args.repeat, || g.trace_batch(&sc.tris, &rays, opts, true));
+        out.push(AutoPoint {
+            scene: sc.name.clone(),
+            triangles: sc.tris.len(),
+            factor: f,
+            resolution: res,
+            m: res.iter().map(|&r| r as f64).product::<f64>().cbrt(),
+            cpu_ns_per_ray: s * 1e9 / rays.len() as f64,
+        });
+    }
+    Ok(out)
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    std::fs::create_dir_all(&args.out)?;
+    let (cost, cost_note) = cost_model();
+    eprintln!("bench: auto resolution with {cost_note}");
+    #[cfg(not(feature = "peers"))]
+    eprintln!("bench: built without the `peers` feature: no bvh/obvhs rows");
+    let scenes = pick_scenes(&args)?;
+    let gpu = if args.no_gpu { None } else { Some(super::gpu_context()?) };
+    let subjects = Subject::all(!args.no_peers).len();
+    let pb = progress((scenes.len() * subjects) as u64, "bench");
+    let mut rows = Vec::new();
+    for sc in &scenes {
+        rows.extend(bench_scene(sc, &args, &cost, gpu.as_ref(), &pb)?);
+    }
+    pb.finish_and_clear();
+    let mut auto = Vec::new();
+    if !args.no_auto_check {
+        let pb = progress(scenes.len() as u64, "auto m");
+        for sc in &scenes {
+            pb.set_message(sc.name.clone());
+            auto.extend(auto_check(sc, &args, &cost)?);
+            pb.inc(1);
+        }
+        pb.finish_and_clear();
+    }
+    let scale = if args.no_scaling { Vec::new() } else { scaling::run(&args, &cost)? };
+    let targets = targets::evaluate(&rows, &auto, &scale);
+
+    write_rows(&args.out, "bench", &rows)?;
+    write_rows(&args.out, "bench-auto-m", &auto)?;
+    write_rows(&args.out, "bench-scaling", &scale)?;
+    write_rows(&args.out, "bench-targets", &targets)?;
+    charts(&args, &scenes, &rows, &scale)?;
+
+    let machine = machine(gpu.as_ref());
+    if args.json {
+        let out = serde_json::json!({
+            "date": crate::format::today(), "machine": machine, "cost_model": cost_note,
+            "rays_per_set": args.rays, "repeat": args.repeat,
+            "rows": rows, "auto_m": auto, "scaling": scale, "targets": targets,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!(
+        "gridrt bench, {} · {machine} · {} rays per set, best of {}",
+        crate::format::today(),
+        args.rays,
+        args.repeat
+    );
+    let f = |v: f64| format!("{v:.2}");
+    let opt = |v: Option<f64>| v.map_or("—".into(), f);
+    let table: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.scene.trim_end_matches(".glb").to_string(),
+                r.triangles.to_string(),
+                r.structure.clone(),
+                format!("{:.1}", r.build_ms),
+                format!("{:.0}", r.bytes_per_triangle),
+                f(r.primary_mrays_s),
+                f(r.random_mrays_s),
+                opt(r.gpu_primary_mrays_s),
+                opt(r.gpu_random_mrays_s),
+                r.mismatches.to_string(),
+            ]
+        })
+        .collect();
+    print_table(
+        &[
+            "scene",
+            "tris",
+            "structure",
+            "build ms",
+            "B/tri",
+            "prim Mr/s",
+            "rand Mr/s",
+            "GPU prim",
+            "GPU rand",
+            "mismatch",
+        ],
+        &table,
+    );
+    if !scale.is_empty() {
+        println!();
+        scaling::print(&scale);
+    }
+    println!();
+    targets::print(&targets);
+    println!("\nrows, charts and targets in {}", args.out.display());
+    Ok(())
+}
+
+fn charts(args: &BenchArgs, scenes: &[FigScene], rows: &[Row], scale: &[scaling::ScalePoint]) -> anyhow::Result<()> {
+    let names: Vec<String> = scenes.iter().map(|s| s.name.trim_end_matches(".glb").to_string()).collect();
+    let structures: Vec<String> = {
+        let mut v: Vec<String> = Vec::new();
+        for r in rows {
+            if !v.contains(&r.structure) {
+                v.push(r.structure.clone());
+            }
+        }
+        v
+    };
+    type Metric = (&'static str, &'static str, bool, fn(&Row) -> f64);
+    let metrics: [Metric; 4] = [
+        ("bench-primary", "primary rays, Mrays/s (CPU)", true, |r| r.primary_mrays_s),
+        ("bench-random", "random rays, Mrays/s (CPU)", true, |r| r.random_mrays_s),
+        ("bench-build", "build ms", true, |r| r.build_ms),
+        ("bench-memory", "bytes per triangle", true, |r| r.bytes_per_triangle),
+    ];
+    for (stem, label, log_y, value) in metrics {
+        let series = structures
+            .iter()
+            .map(|s| Series {
+                label: s.clone(),
+                points: scenes
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, sc)| {
+                        rows.iter().find(|r| &r.structure == s && r.scene == sc.name).map(|r| (i as f64, value(r)))
+                    })
+                    .collect(),
+                predicted: rows.iter().any(|r| &r.structure == s && r.family == "peer"),
+            })
+            .collect();
+        save_chart(
+            &args.out,
+            stem,
+            &Chart {
+                title: format!("{label}: grids (solid) vs BVHs (dashed)"),
+                x_label: "scene (by triangle count)".into(),
+                y_label: label.into(),
+                log_x: false,
+                log_y,
+                series,
+                markers: Vec::new(),
+                x_names: Some(names.clone()),
+            },
+        )?;
+    }
+    if !scale.is_empty() {
+        save_chart(&args.out, "bench-scaling", &scaling::chart(scale))?;
+    }
+    Ok(())
+}
