@@ -403,3 +403,47 @@ fn app_screenshots_under_xvfb() {
     assert!(!out.status.success(), "a bad scene must fail the smoke run");
     assert!(err.contains("app-bad.glb"), "the error names the file: {err}");
 }
+
+/// `gridrt bench --quick --procedural`: every grid kind and every peer BVH on two scenes, with
+/// hits that agree with the flat grid's, the scaling run and the targets, as JSON and files.
+#[test]
+fn bench_compares_grids_and_peers_on_the_same_rays() {
+    let out = tmp("bench");
+    let text = ok(&["bench", "--quick", "--procedural", "--repeat", "1", "--rays", "4000", "--json", "--out", s(&out)]);
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text}"));
+    let rows = v["rows"].as_array().unwrap();
+    let structures: Vec<&str> = rows.iter().map(|r| r["structure"].as_str().unwrap()).collect();
+    for name in ["flat", "macrocell", "multires", "twolevel", "proximity", "bvh (build_par)", "obvhs BVH2 fastest"] {
+        assert!(structures.contains(&name), "{name} missing from {structures:?}");
+    }
+    assert_eq!(rows.len() % 10, 0, "5 grids + 5 peer configurations per scene");
+    for r in rows {
+        assert!(r["primary_mrays_s"].as_f64().unwrap() > 0.0 && r["random_mrays_s"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["memory_bytes"].as_u64().unwrap() > 0, "{r}");
+        // Everything on the shared watertight test gives the flat grid's answers on every ray.
+        if r["shared_triangle_test"] == true {
+            assert_eq!(r["mismatches"], 0, "{r}");
+        }
+        if r["family"] == "grid" {
+            assert!(r["gpu_primary_mrays_s"].as_f64().unwrap() > 0.0, "{r}");
+        }
+    }
+    let scaling = v["scaling"].as_array().unwrap();
+    assert_eq!(scaling.len(), 9, "3 sizes × (flat, bvh, obvhs)");
+    let targets = v["targets"].as_array().unwrap();
+    for t in [
+        "flat build speed-up over bvh build_par",
+        "best grid / bvh Mrays/s, primary",
+        "auto m time / best swept time (CPU)",
+    ] {
+        assert!(targets.iter().any(|x| x["target"] == t), "target {t} missing");
+    }
+    assert!(v["auto_m"].as_array().unwrap().iter().any(|p| p["factor"] == 1.0));
+    for f in ["bench.csv", "bench.json", "bench-scaling.csv", "bench-targets.csv", "bench-auto-m.csv"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    for chart in ["bench-primary", "bench-random", "bench-build", "bench-memory", "bench-scaling"] {
+        assert!(std::fs::read_to_string(out.join(format!("{chart}.svg"))).unwrap().contains("<svg"), "{chart}.svg");
+    }
+    fails(&["bench", "--scenes", "/nonexistent", "--no-gpu", "--out", s(&out)], "/nonexistent");
+}

@@ -3,8 +3,10 @@
 //!
 //! Built sort-last in linear time (survey Algorithm 1): count the references per cell, prefix
 //! sum, scatter. References in a cell are in increasing triangle order. The parallel build
-//! counts and scatters with atomics, then sorts each cell's references, so that its output is
-//! bit-identical to the serial build's.
+//! splits the grid into slabs of z layers (contiguous ranges of cells, so of `cell_start` and
+//! `refs` too): triangles are binned by the slabs they touch, in increasing order, and each
+//! slab counts and scatters its own cells without atomics. Its output is therefore
+//! bit-identical to the serial build's, with no sort.
 
 // std::time::Instant panics on wasm32-unknown-unknown; web-time is std's Instant elsewhere.
 use web_time::Instant;
@@ -140,12 +142,46 @@ fn build_serial(
 
 #[cfg(feature = "parallel")]
 mod parallel {
-    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
-
     use rayon::prelude::*;
 
     use super::*;
-    use crate::insert::{for_each_cell, prepare};
+    use crate::insert::{for_each_cell_in_layers, prepare};
+
+    /// In-place inclusive prefix sum of `counts` in two parallel passes (chunk sums, then each
+    /// chunk's running sum from its offset); returns the total.
+    fn par_inclusive_scan(counts: &mut [u32]) -> Result<u64, BuildError> {
+        const CHUNK: usize = 1 << 16;
+        let sums: Vec<u64> = counts.par_chunks(CHUNK).map(|c| c.iter().map(|&x| x as u64).sum()).collect();
+        let mut offsets = Vec::with_capacity(sums.len());
+        let mut total = 0u64;
+        for s in sums {
+            offsets.push(total);
+            total += s;
+        }
+        if total > MAX_REFS {
+            return Err(BuildError::TooManyReferences { refs: total, limit: MAX_REFS });
+        }
+        counts.par_chunks_mut(CHUNK).zip(offsets).for_each(|(c, offset)| {
+            // Fits: every partial sum is at most `total` ≤ MAX_REFS < 2³².
+            let mut acc = offset as u32;
+            for x in c {
+                acc += *x;
+                *x = acc;
+            }
+        });
+        Ok(total)
+    }
+
+    /// Splits `v` into consecutive mutable pieces of the given lengths.
+    fn split_lengths<'a, T>(mut v: &'a mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&'a mut [T]> {
+        let mut out = Vec::new();
+        for len in lengths {
+            let (a, b) = std::mem::take(&mut v).split_at_mut(len);
+            out.push(a);
+            v = b;
+        }
+        out
+    }
 
     pub(super) fn build(
         tris: &[[Vec3; 3]],
@@ -154,56 +190,80 @@ mod parallel {
         times: &mut PhaseTimes,
     ) -> Result<FlatGrid, BuildError> {
         let cells = geom.cell_count() as usize;
-        let counts: Vec<AtomicU32> = times.record("count", || {
-            let counts: Vec<AtomicU32> = (0..cells).into_par_iter().map(|_| AtomicU32::new(0)).collect();
-            tris.par_iter().for_each(|tri| {
-                for_each_cell(&geom, &prepare(&geom, tri, INSERT_MARGIN_CELLS), mode, |c| {
-                    counts[c].fetch_add(1, Relaxed);
-                });
-            });
-            counts
+        let layer = geom.res.x as usize * geom.res.y as usize;
+        let nz = geom.res.z;
+        // Several slabs per thread so that work stealing evens out dense and sparse slabs.
+        let slabs = (rayon::current_num_threads() * 2).clamp(1, nz as usize);
+        let edge: Vec<u32> = (0..=slabs).map(|s| (s as u64 * nz as u64 / slabs as u64) as u32).collect();
+        // Each triangle's z layers; a slab visits the triangles whose layers meet it, in
+        // increasing order.
+        let (span, box_refs): (Vec<[u32; 2]>, Vec<u64>) = times.record("bin", || {
+            tris.par_iter()
+                .map(|t| {
+                    let g = prepare(&geom, t, INSERT_MARGIN_CELLS);
+                    let e = g.hi - g.lo + glam::UVec3::ONE;
+                    ([g.lo.z, g.hi.z], e.x as u64 * e.y as u64 * e.z as u64)
+                })
+                .unzip()
         });
-        let cell_start = times.record("scan", || prefix_sum(counts.iter().map(|c| c.load(Relaxed)), cells))?;
+        // The bounding boxes' cells bound the references from above (exactly, for box
+        // insertion): a grid far over the limit is refused before its cells are visited one by
+        // one (a fine grid over long slivers would otherwise take minutes to fail).
+        let upper: u64 = box_refs.par_iter().sum();
+        drop(box_refs);
+        if mode == InsertMode::BoundingBox && upper > MAX_REFS {
+            return Err(BuildError::TooManyReferences { refs: upper, limit: MAX_REFS });
+        }
+        let in_slab = |s: usize| {
+            let (z0, z1) = (edge[s], edge[s + 1]);
+            span.iter().enumerate().filter(move |(_, z)| z[0] < z1 && z[1] >= z0).map(|(i, _)| i as u32)
+        };
+        let slab_cells = |s: usize| (edge[s + 1] - edge[s]) as usize * layer;
+        // `offsets` becomes `cell_start` in place (Lagae & Dutré): counts, then their inclusive
+        // prefix sum (each cell's end), then the scatter decrements each cell's end once per
+        // reference, filling the cell backwards, so each entry ends at its cell's start. No
+        // cursor array, no second M-sized allocation.
+        let mut offsets = vec![0u32; cells + 1];
+        times.record("count", || {
+            split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells)).into_par_iter().enumerate().for_each(
+                |(s, part)| {
+                    let base = edge[s] as usize * layer;
+                    for i in in_slab(s) {
+                        let g = prepare(&geom, &tris[i as usize], INSERT_MARGIN_CELLS);
+                        for_each_cell_in_layers(&geom, &g, mode, edge[s]..edge[s + 1], |c| part[c - base] += 1);
+                    }
+                },
+            )
+        });
+        let total = times.record("scan", || par_inclusive_scan(&mut offsets[..cells]))?;
+        offsets[cells] = total as u32;
         let refs = times.record("scatter", || {
-            counts.par_iter().zip(&cell_start[..cells]).for_each(|(c, s)| c.store(*s, Relaxed));
-            let refs: Vec<AtomicU32> = (0..cell_start[cells]).into_par_iter().map(|_| AtomicU32::new(0)).collect();
-            tris.par_iter().enumerate().for_each(|(i, tri)| {
-                for_each_cell(&geom, &prepare(&geom, tri, INSERT_MARGIN_CELLS), mode, |c| {
-                    let slot = counts[c].fetch_add(1, Relaxed);
-                    refs[slot as usize].store(i as u32, Relaxed);
-                });
-            });
-            refs.into_par_iter().map(AtomicU32::into_inner).collect::<Vec<u32>>()
-        });
-        // Scatter order within a cell depends on thread timing; sorting restores the serial
-        // (increasing triangle) order. Work is split into runs of whole cells.
-        let refs = times.record("sort", || {
-            let mut refs = refs;
-            let target = (refs.len() / (rayon::current_num_threads() * 16)).max(4096);
-            let mut pieces: Vec<(&mut [u32], &[u32])> = Vec::new();
-            let mut rest: &mut [u32] = &mut refs;
-            let mut cell = 0;
-            while cell < cells {
-                let first = cell;
-                let base = cell_start[first];
-                while cell < cells
-                    && (cell_start[cell + 1] - base) as usize <= target.max((cell_start[first + 1] - base) as usize)
-                {
-                    cell += 1;
-                }
-                let len = (cell_start[cell] - base) as usize;
-                let (piece, tail) = std::mem::take(&mut rest).split_at_mut(len);
-                rest = tail;
-                pieces.push((piece, &cell_start[first..=cell]));
-            }
-            pieces.into_par_iter().for_each(|(piece, starts)| {
-                let base = starts[0];
-                for w in starts.windows(2) {
-                    piece[(w[0] - base) as usize..(w[1] - base) as usize].sort_unstable();
+            let mut refs = vec![0u32; total as usize];
+            // A slab's references start where the cell before it ends.
+            let slab_start = |s: usize| {
+                let base = edge[s] as usize * layer;
+                if base == 0 { 0 } else { offsets[base - 1] as usize }
+            };
+            let ref_bounds: Vec<usize> =
+                (0..=slabs).map(|s| if s == slabs { total as usize } else { slab_start(s) }).collect();
+            let ref_parts = split_lengths(&mut refs, ref_bounds.windows(2).map(|w| w[1] - w[0]));
+            let end_parts = split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells));
+            ref_parts.into_par_iter().zip(end_parts).enumerate().for_each(|(s, (out, end))| {
+                let base = edge[s] as usize * layer;
+                let ref_base = ref_bounds[s] as u32;
+                // Backwards, so that each cell, filled from its end, holds increasing indices.
+                for i in in_slab(s).rev() {
+                    let g = prepare(&geom, &tris[i as usize], INSERT_MARGIN_CELLS);
+                    for_each_cell_in_layers(&geom, &g, mode, edge[s]..edge[s + 1], |c| {
+                        let e = &mut end[c - base];
+                        *e -= 1;
+                        out[(*e - ref_base) as usize] = i;
+                    });
                 }
             });
             refs
         });
+        let cell_start = offsets;
         Ok(FlatGrid { geom, cell_start, refs })
     }
 }

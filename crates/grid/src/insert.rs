@@ -44,18 +44,34 @@ pub fn prepare(geom: &GridGeometry, tri: &[Vec3; 3], margin: f64) -> GridTriangl
     let lo = v[0].min(v[1]).min(v[2]) - DVec3::splat(margin);
     let hi = v[0].max(v[1]).max(v[2]) + DVec3::splat(margin);
     let max = (geom.res - UVec3::ONE).as_dvec3();
-    let lo = lo.floor().clamp(DVec3::ZERO, max).as_uvec3();
-    let hi = hi.floor().clamp(DVec3::ZERO, max).as_uvec3();
+    // Clamping to [0, res − 1] then truncating equals flooring then clamping, and avoids a libm
+    // call per component (x86-64's baseline has no SSE4.1 round instruction).
+    let lo = lo.clamp(DVec3::ZERO, max).as_uvec3();
+    let hi = hi.clamp(DVec3::ZERO, max).as_uvec3();
     GridTriangle { v, lo, hi, margin }
 }
 
 /// Calls `f(cell_index)` for every cell `tri` is inserted into, in increasing index order
 /// (z, then y, then x), and returns how many.
 #[inline]
-pub fn for_each_cell(geom: &GridGeometry, g: &GridTriangle, mode: InsertMode, mut f: impl FnMut(usize)) -> u32 {
+pub fn for_each_cell(geom: &GridGeometry, g: &GridTriangle, mode: InsertMode, f: impl FnMut(usize)) -> u32 {
+    for_each_cell_in_layers(geom, g, mode, 0..geom.res.z, f)
+}
+
+/// [`for_each_cell`] restricted to the z layers `layers` (the parallel build gives each thread
+/// a slab of layers). The result over all slabs is exactly [`for_each_cell`]'s: in particular
+/// a triangle's single-cell shortcut is decided on its whole range, not on the slab's part.
+#[inline]
+pub fn for_each_cell_in_layers(
+    geom: &GridGeometry,
+    g: &GridTriangle,
+    mode: InsertMode,
+    layers: std::ops::Range<u32>,
+    mut f: impl FnMut(usize),
+) -> u32 {
     let single = g.lo == g.hi;
     let mut n = 0;
-    for z in g.lo.z..=g.hi.z {
+    for z in g.lo.z.max(layers.start)..=g.hi.z.min(layers.end.saturating_sub(1)) {
         for y in g.lo.y..=g.hi.y {
             for x in g.lo.x..=g.hi.x {
                 let c = UVec3::new(x, y, z);
@@ -143,8 +159,16 @@ pub fn bucket(
     };
     let start = web_time::Instant::now();
     let mut counts = vec![0u32; cells];
+    let mut upper = 0u64;
     for k in 0..n {
         let g = prepare(geom, &tris[id(k) as usize], margin);
+        // Refuse a grid over the reference limit before visiting its cells one by one (the
+        // box's cell count bounds the triangle's references from above).
+        let e = g.hi - g.lo + UVec3::ONE;
+        upper += e.x as u64 * e.y as u64 * e.z as u64;
+        if mode == InsertMode::BoundingBox && upper > crate::flat::MAX_REFS {
+            return Err(crate::BuildError::TooManyReferences { refs: upper, limit: crate::flat::MAX_REFS });
+        }
         for_each_cell(geom, &g, mode, |c| counts[c] += 1);
     }
     record("count", start);

@@ -42,7 +42,7 @@ pub enum BuildError {
     #[error("{0} triangles: a grid indexes at most 2^32 - 2")]
     TooManyTriangles(u64),
     #[error(
-        "the grid would hold {refs} triangle references, more than the limit of {limit}; lower the resolution or use bounding-box-free exact insertion"
+        "the grid would hold at least {refs} triangle references, more than the limit of {limit}; lower the resolution or use exact insertion (--exact)"
     )]
     TooManyReferences { refs: u64, limit: u64 },
     #[error("{0}")]
@@ -51,6 +51,21 @@ pub enum BuildError {
 
 /// Bounds of a triangle soup (all corners).
 pub fn triangle_bounds(tris: &[[Vec3; 3]]) -> Aabb {
+    triangle_bounds_with(tris, false)
+}
+
+/// [`triangle_bounds`], on all threads when `parallel` (and the `parallel` feature) is on.
+/// Min and max are exact, so the result does not depend on the split.
+pub fn triangle_bounds_with(tris: &[[Vec3; 3]], parallel: bool) -> Aabb {
+    #[cfg(feature = "parallel")]
+    if parallel {
+        use rayon::prelude::*;
+        return tris
+            .par_chunks(16 * 1024)
+            .map(|c| Aabb::from_points(c.iter().flatten()))
+            .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
+    }
+    let _ = parallel;
     Aabb::from_points(tris.iter().flatten())
 }
 

@@ -13,8 +13,9 @@
 //! - line model (eq. 2): with μ = N/m, the minimum is at m = (N·Tinter/Tstep)^½, so
 //!   M = (N·Tinter/Tstep)^{3/2}. (The survey's text prints the exponent as 1/3 but states
 //!   the O(N^1.5) result; the derivation gives 1/2 for m, i.e. 3/2 for M.)
-//! - cost-model guess-and-check (§3.3, the default): N_m is counted exactly (same insertion
-//!   as the build) for sampled m in the survey's interval [m_point, m_line] — the two model
+//! - cost-model guess-and-check (§3.3, the default): N_m is counted (same insertion as the
+//!   build; exactly up to [`EXACT_COUNT_LIMIT`] triangles, above it with the large triangles
+//!   exact and the small ones from a systematic sample) for sampled m in the survey's interval [m_point, m_line] — the two model
 //!   optima, (10N)^⅓ … (5N)^½ with the default constants — each in linear time, and the m
 //!   minimising T(m) = Tsetup + m·Tstep + (N_m/m²)·Tinter is taken. The sampled curve is
 //!   returned for plotting. The interval's top is capped by a memory budget
@@ -131,7 +132,8 @@ pub struct CostSample {
     pub m: f64,
     pub resolution: [u32; 3],
     pub cells: u64,
-    /// Triangle–cell references N_m (exact, for the chosen insertion mode).
+    /// Triangle–cell references N_m for the chosen insertion mode (exact up to
+    /// [`EXACT_COUNT_LIMIT`] triangles, else an estimate; see [`count_refs_curve`]).
     pub n_m: u64,
     /// μ = N_m / m².
     pub mu: f64,
@@ -206,8 +208,131 @@ pub fn choose(
     ResolutionChoice { resolution, policy, curve: Vec::new() }
 }
 
+/// Above this many triangles, guess-and-check estimates N_m for bounding-box insertion from a
+/// sample instead of counting every triangle at every sampled m (see [`count_refs_curve`]).
+pub const EXACT_COUNT_LIMIT: usize = 1 << 15;
+
+/// A grid's constants for counting the cells of a triangle's bounding box.
+#[derive(Clone, Copy, Debug)]
+struct BoxCounter {
+    min: glam::DVec3,
+    inv: glam::DVec3,
+    max: glam::DVec3,
+}
+
+impl BoxCounter {
+    fn new(geom: &GridGeometry) -> BoxCounter {
+        BoxCounter {
+            min: geom.min.as_dvec3(),
+            inv: geom.inv_cell.as_dvec3(),
+            max: (geom.res - glam::UVec3::ONE).as_dvec3(),
+        }
+    }
+
+    /// Cells the bounding box `[lo, hi]` covers (the same arithmetic as [`prepare`]: the
+    /// per-axis map to grid space is monotonic, so transforming the box's corners gives exactly
+    /// the min and max of the transformed vertices).
+    #[inline]
+    fn cells(&self, lo: glam::DVec3, hi: glam::DVec3) -> u64 {
+        // Clamping to [0, res − 1] first and truncating equals flooring then clamping, without
+        // a libm call per component (x86-64's baseline has no SSE4.1 round).
+        let l = ((lo - self.min) * self.inv - INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
+        let h = ((hi - self.min) * self.inv + INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
+        let e = h - l + glam::UVec3::ONE;
+        e.x as u64 * e.y as u64 * e.z as u64
+    }
+
+    /// Whether the box is narrower than one cell (minus the margins) on every axis.
+    #[inline]
+    fn is_small(&self, lo: glam::DVec3, hi: glam::DVec3) -> bool {
+        ((hi - lo) * self.inv).max_element() + 2.0 * INSERT_MARGIN_CELLS < 1.0
+    }
+}
+
+/// N_m at each of `resolutions` (increasing) for bounding-box insertion, in one pass over the
+/// triangles. Up to [`EXACT_COUNT_LIMIT`] triangles every count is exact. Above it, a triangle
+/// narrower than a cell at the coarsest resolution ("small") is counted at the finer ones only
+/// if it falls in a systematic 1-in-k sample, and the sample's mean stands in for the rest;
+/// every other ("large") triangle is always counted exactly, so the few big triangles that
+/// dominate N_m in architectural scenes never depend on the sample. The coarsest resolution's
+/// count is always exact. Returns the counts and how many triangles were counted at every m.
+pub fn count_refs_curve(
+    tris: &[[Vec3; 3]],
+    bounds: &Aabb,
+    resolutions: &[[u32; 3]],
+    parallel: bool,
+) -> (Vec<u64>, usize) {
+    let geoms: Vec<BoxCounter> = resolutions.iter().map(|&r| BoxCounter::new(&GridGeometry::new(bounds, r))).collect();
+    let k = geoms.len();
+    if k == 0 {
+        return (Vec::new(), tris.len());
+    }
+    let stride = tris.len().div_ceil(EXACT_COUNT_LIMIT).max(1);
+    // Per chunk: [exact counts of large and sampled small triangles ×k, small total, small
+    // sampled, large count at the first resolution].
+    let chunk = |base: usize, part: &[[Vec3; 3]]| {
+        let mut large = vec![0u64; k];
+        let mut small = vec![0u64; k];
+        let (mut n_small, mut n_sampled) = (0u64, 0u64);
+        for (j, t) in part.iter().enumerate() {
+            let lo = t[0].min(t[1]).min(t[2]).as_dvec3();
+            let hi = t[0].max(t[1]).max(t[2]).as_dvec3();
+            let c0 = geoms[0].cells(lo, hi);
+            if stride > 1 && geoms[0].is_small(lo, hi) {
+                n_small += 1;
+                small[0] += c0;
+                if (base + j) % stride == 0 {
+                    n_sampled += 1;
+                    for (s, g) in small.iter_mut().zip(&geoms).skip(1) {
+                        *s += g.cells(lo, hi);
+                    }
+                }
+            } else {
+                large[0] += c0;
+                for (s, g) in large.iter_mut().zip(&geoms).skip(1) {
+                    *s += g.cells(lo, hi);
+                }
+            }
+        }
+        (large, small, n_small, n_sampled)
+    };
+    const CHUNK: usize = 8192;
+    let merge = |a: (Vec<u64>, Vec<u64>, u64, u64), b: (Vec<u64>, Vec<u64>, u64, u64)| {
+        let add = |x: Vec<u64>, y: Vec<u64>| x.iter().zip(&y).map(|(p, q)| p + q).collect::<Vec<u64>>();
+        (add(a.0, b.0), add(a.1, b.1), a.2 + b.2, a.3 + b.3)
+    };
+    let zero = || (vec![0u64; k], vec![0u64; k], 0u64, 0u64);
+    #[cfg(feature = "parallel")]
+    let (large, small, n_small, n_sampled) = if parallel {
+        use rayon::prelude::*;
+        tris.par_chunks(CHUNK).enumerate().map(|(i, p)| chunk(i * CHUNK, p)).reduce(zero, merge)
+    } else {
+        tris.chunks(CHUNK).enumerate().map(|(i, p)| chunk(i * CHUNK, p)).fold(zero(), merge)
+    };
+    #[cfg(not(feature = "parallel"))]
+    let (large, small, n_small, n_sampled) = {
+        let _ = parallel;
+        tris.chunks(CHUNK).enumerate().map(|(i, p)| chunk(i * CHUNK, p)).fold(zero(), merge)
+    };
+    let counts = (0..k)
+        .map(|i| {
+            if i == 0 {
+                large[0] + small[0]
+            } else if n_sampled == 0 {
+                // No small triangle fell in the sample (so there are few): each covers ≥ 1 cell.
+                large[i] + n_small
+            } else {
+                large[i] + (small[i] as f64 * n_small as f64 / n_sampled as f64).round() as u64
+            }
+        })
+        .collect();
+    let counted = (tris.len() as u64 - n_small + n_sampled) as usize;
+    (counts, counted)
+}
+
 /// T(m) sampled at `model.samples` geometrically spaced m in [m_point, m_line] (capped by
-/// memory), distinct resolutions only, in increasing m.
+/// memory), distinct resolutions only, in increasing m. N_m is exact for exact insertion and
+/// up to [`EXACT_COUNT_LIMIT`] triangles, else estimated (see [`count_refs_curve`]).
 pub fn sample_curve(
     tris: &[[Vec3; 3]],
     bounds: &Aabb,
@@ -220,24 +345,37 @@ pub fn sample_curve(
     let m_lo = (2.0 * r * n).cbrt().max(1.0);
     let m_hi = (r * n).sqrt().min((model.cell_cap(tris.len()) as f64).cbrt()).max(m_lo);
     let k = model.samples.max(2);
-    let mut out: Vec<CostSample> = Vec::new();
+    let mut resolutions: Vec<[u32; 3]> = Vec::new();
     for i in 0..k {
         let m = m_lo * (m_hi / m_lo).powf(i as f64 / (k - 1) as f64);
         let res = cubic_cells(bounds, m * m * m);
-        if out.iter().any(|s| s.resolution == res) {
-            continue;
+        if !resolutions.contains(&res) {
+            resolutions.push(res);
         }
-        let cells = res.iter().map(|&x| x as u64).product::<u64>();
-        let n_m = count_refs(tris, bounds, res, mode, parallel);
-        let mg = (cells as f64).cbrt();
-        out.push(CostSample {
-            m: mg,
-            resolution: res,
-            cells,
-            n_m,
-            mu: n_m as f64 / (mg * mg),
-            cost: model.cost(cells, n_m),
-        });
     }
-    out
+    samples_at(tris, bounds, model, &resolutions, mode, parallel)
+}
+
+/// T(m) at the given resolutions (increasing), N_m counted as [`sample_curve`] does.
+pub fn samples_at(
+    tris: &[[Vec3; 3]],
+    bounds: &Aabb,
+    model: &CostModel,
+    resolutions: &[[u32; 3]],
+    mode: InsertMode,
+    parallel: bool,
+) -> Vec<CostSample> {
+    let counts: Vec<u64> = match mode {
+        InsertMode::BoundingBox => count_refs_curve(tris, bounds, resolutions, parallel).0,
+        InsertMode::Exact => resolutions.iter().map(|&res| count_refs(tris, bounds, res, mode, parallel)).collect(),
+    };
+    resolutions
+        .iter()
+        .zip(counts)
+        .map(|(&res, n_m)| {
+            let cells = res.iter().map(|&x| x as u64).product::<u64>();
+            let mg = (cells as f64).cbrt();
+            CostSample { m: mg, resolution: res, cells, n_m, mu: n_m as f64 / (mg * mg), cost: model.cost(cells, n_m) }
+        })
+        .collect()
 }

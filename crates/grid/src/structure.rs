@@ -15,7 +15,7 @@ use crate::resolution::{self, CostModel, Resolution, ResolutionChoice};
 use crate::stats::{BatchStats, RayStats};
 use crate::trace::{TraceOptions, trace_batch, trace_flat};
 use crate::twolevel::TwoLevelOptions;
-use crate::{BuildError, triangle_bounds};
+use crate::{BuildError, triangle_bounds_with};
 
 /// The structures (`--grid`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -248,7 +248,7 @@ impl AnyGrid {
 /// Builds the structure `cfg` over `tris`.
 pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildReport), BuildError> {
     let mut times = PhaseTimes::default();
-    let bounds = times.record("bounds", || triangle_bounds(tris));
+    let bounds = times.record("bounds", || triangle_bounds_with(tris, cfg.build.parallel));
     let choose = |times: &mut PhaseTimes, policy: Resolution| {
         times.record("resolution", || {
             resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.insert, cfg.build.parallel)

@@ -176,3 +176,35 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     let m = |c: &gridrt_grid::ResolutionChoice| c.resolution.iter().map(|&x| x as f64).product::<f64>();
     assert!(m(&cheap) > m(&dear), "{:?} vs {:?}", cheap.resolution, dear.resolution);
 }
+
+/// Above `EXACT_COUNT_LIMIT` triangles guess-and-check estimates N_m from a sample (large
+/// triangles always counted): the estimate stays within 2% of the exact count on scenes whose
+/// N_m is dominated by small triangles (particles), by many mid-size ones (mountain, slivers),
+/// and by a few huge ones next to many tiny ones (teapot in a stadium, plus a big box).
+#[test]
+fn guess_and_check_estimate_tracks_the_exact_count() {
+    let mut stadium = tris_of(SceneKind::TeapotInStadium, 3);
+    stadium.extend(tris_of(SceneKind::Particles, 60_000));
+    let scenes = [
+        ("particles", tris_of(SceneKind::Particles, 120_000)),
+        ("mountain", tris_of(SceneKind::Mountain, 8)),
+        ("slivers", tris_of(SceneKind::Slivers, 50_000)),
+        ("stadium+particles", stadium),
+    ];
+    for (name, tris) in &scenes {
+        assert!(tris.len() > resolution::EXACT_COUNT_LIMIT, "{name}: {} triangles", tris.len());
+        let b = triangle_bounds(tris);
+        let res: Vec<[u32; 3]> = [40, 80, 160].iter().map(|&m| resolution::cubic_m(&b, m)).collect();
+        let (est, counted) = resolution::count_refs_curve(tris, &b, &res, true);
+        assert!(counted < tris.len(), "{name}: nothing was sampled");
+        let (serial, _) = resolution::count_refs_curve(tris, &b, &res, false);
+        assert_eq!(est, serial, "{name}: the estimate depends on the thread split");
+        for (r, e) in res.iter().zip(&est) {
+            let exact = resolution::count_refs(tris, &b, *r, InsertMode::BoundingBox, true);
+            let err = (*e as f64 / exact as f64 - 1.0).abs();
+            assert!(err < 0.02, "{name} at {r:?}: estimate {e} vs exact {exact} ({:.2}%)", err * 100.0);
+        }
+        // The coarsest resolution is always exact.
+        assert_eq!(est[0], resolution::count_refs(tris, &b, res[0], InsertMode::BoundingBox, true), "{name}");
+    }
+}

@@ -111,19 +111,6 @@ pub fn best_of<T>(repeat: u32, mut f: impl FnMut() -> T) -> (f64, T) {
     (best, out.expect("at least one run"))
 }
 
-/// The cost model the command line's auto resolution uses: the saved calibration when there is
-/// one, else the survey's constants; and a note saying which.
-pub fn cost_model() -> (CostModel, String) {
-    let mut m = CostModel::default();
-    match super::experiment::cost_constants::load_calibration() {
-        Some((path, c)) => {
-            (m.t_setup, m.t_step, m.t_inter) = (c.cpu.t_setup, c.cpu.t_step, c.cpu.t_inter);
-            (m, format!("calibrated constants from {}", path.display()))
-        }
-        None => (m, "the survey's constants (Tsetup 1.0, Tstep 0.1, Tinter 0.5)".into()),
-    }
-}
-
 /// Whether two closest hits agree: the same triangle, or both hits within 1e-5 relative t
 /// (a near-tie between triangles), or both misses.
 pub fn agree(a: &Hit, b: &Hit) -> bool {
@@ -337,7 +324,7 @@ fn auto_check(sc: &FigScene, args: &BenchArgs, cost: &CostModel) -> anyhow::Resu
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)?;
-    let (cost, cost_note) = cost_model();
+    let (cost, cost_note) = super::experiment::cost_constants::active_cost_model();
     eprintln!("bench: auto resolution with {cost_note}");
     #[cfg(not(feature = "peers"))]
     eprintln!("bench: built without the `peers` feature: no bvh/obvhs rows");

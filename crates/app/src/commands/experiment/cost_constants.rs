@@ -75,6 +75,19 @@ pub fn calibration_path() -> Option<PathBuf> {
 }
 
 /// The saved CPU constants, if a calibration file exists and is valid.
+/// The cost model the command line's auto resolution uses: the saved calibration's CPU
+/// constants when there is one, else the survey's; and a note saying which.
+pub fn active_cost_model() -> (CostModel, String) {
+    let mut m = CostModel::default();
+    match load_calibration() {
+        Some((path, c)) => {
+            (m.t_setup, m.t_step, m.t_inter) = (c.cpu.t_setup, c.cpu.t_step, c.cpu.t_inter);
+            (m, format!("calibrated constants from {}", path.display()))
+        }
+        None => (m, "the survey's constants (Tsetup 1.0, Tstep 0.1, Tinter 0.5)".into()),
+    }
+}
+
 pub fn load_calibration() -> Option<(PathBuf, Calibration)> {
     let path = calibration_path()?;
     let text = std::fs::read_to_string(&path).ok()?;

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use glam::Vec3;
 use gridrt_gpu::Tracer;
-use gridrt_grid::resolution::sample_curve;
+use gridrt_grid::resolution::{cubic_cells, sample_curve, samples_at};
 use gridrt_grid::{CostModel, InsertMode};
 use gridrt_scene::procedural::{self, SceneKind};
 use gridrt_scene::rays::{camera_rays, random_rays};
@@ -24,6 +24,9 @@ use serde::Serialize;
 use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use super::sweep::{Gpu, Point, machine, measure, upload};
 use crate::cli::ExperimentArgs;
+
+/// Sweep points below the survey's interval (down to half its low end).
+const BELOW: usize = 4;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -37,6 +40,8 @@ pub struct Row {
     pub predicted_cpu_ns: f64,
     /// Guess-and-check picked this m.
     pub auto: bool,
+    /// Inside the survey's interval (the cost model's samples) or below it.
+    pub in_interval: bool,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -141,9 +146,12 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(args)?;
     let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
     let tracer = Tracer::new();
-    let model = CostModel { samples: if args.quick { 6 } else { 16 }, ..CostModel::default() };
+    // The constants the command line's auto resolution uses: the calibration when saved.
+    let (model, note) = super::cost_constants::active_cost_model();
+    eprintln!("fig5: cost model with {note}");
+    let model = CostModel { samples: if args.quick { 6 } else { 16 }, ..model };
     let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
-    let pb = progress((scenes.len() * model.samples as usize) as u64, "fig5");
+    let pb = progress((scenes.len() * (model.samples as usize + BELOW)) as u64, "fig5");
     let (mut rows, mut summary) = (Vec::new(), Vec::new());
     for sc in &scenes {
         pb.set_message(sc.name.clone());
@@ -151,14 +159,26 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         let rays = mixed_rays(&sc.bounds, rays_n, 3);
         let gscene = upload(ctx.as_ref(), &sc.tris)?;
         let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
-        let curve = sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true);
-        let auto = curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).expect("a sample").resolution;
+        let interval = sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true);
+        let auto = interval.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).expect("a sample").resolution;
+        // The measured optimum often sits at or below the interval's low end, (2N·Tinter/Tstep)^⅓:
+        // the sweep starts at half of it.
+        let below: Vec<[u32; 3]> = (1..=BELOW)
+            .rev()
+            .map(|k| cubic_cells(&sc.bounds, (interval[0].m * 2f64.powf(-(k as f64) / 4.0)).powi(3)))
+            .filter(|r| r.iter().map(|&x| x as u64).product::<u64>() < interval[0].cells)
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        let mut curve = samples_at(&sc.tris, &sc.bounds, &model, &below, InsertMode::BoundingBox, true);
+        curve.sort_by(|a, b| a.cells.cmp(&b.cells));
+        curve.extend(interval.iter().cloned());
         let mut pts = Vec::new();
         for s in &curve {
             pts.push((measure(&sc.tris, s.resolution, &rays, gpu.as_ref(), 2)?, s.cost));
             pb.inc(1);
         }
-        pb.inc((model.samples as usize).saturating_sub(curve.len()) as u64);
+        pb.inc((model.samples as usize + BELOW).saturating_sub(curve.len()) as u64);
         // T(m) in CPU nanoseconds: the least-squares scale through the origin.
         let scale =
             pts.iter().map(|(p, c)| p.cpu_ns_per_ray * c).sum::<f64>() / pts.iter().map(|(_, c)| c * c).sum::<f64>();
@@ -228,6 +248,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
             kind: sc.kind.clone(),
             triangles: sc.tris.len(),
             auto: p.resolution == auto,
+            in_interval: p.cells >= interval[0].cells,
             predicted_cpu_ns: c * scale,
             predicted_cost: c,
             point: p,
