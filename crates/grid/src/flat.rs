@@ -173,7 +173,7 @@ mod parallel {
     }
 
     /// Splits `v` into consecutive mutable pieces of the given lengths.
-    fn split_lengths<'a, T>(mut v: &'a mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&'a mut [T]> {
+    fn split_lengths<T>(mut v: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
         let mut out = Vec::new();
         for len in lengths {
             let (a, b) = std::mem::take(&mut v).split_at_mut(len);

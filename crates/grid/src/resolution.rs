@@ -281,7 +281,7 @@ pub fn count_refs_curve(
             if stride > 1 && geoms[0].is_small(lo, hi) {
                 n_small += 1;
                 small[0] += c0;
-                if (base + j) % stride == 0 {
+                if (base + j).is_multiple_of(stride) {
                     n_sampled += 1;
                     for (s, g) in small.iter_mut().zip(&geoms).skip(1) {
                         *s += g.cells(lo, hi);

@@ -171,7 +171,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
             .into_iter()
             .collect();
         let mut curve = samples_at(&sc.tris, &sc.bounds, &model, &below, InsertMode::BoundingBox, true);
-        curve.sort_by(|a, b| a.cells.cmp(&b.cells));
+        curve.sort_by_key(|s| s.cells);
         curve.extend(interval.iter().cloned());
         let mut pts = Vec::new();
         for s in &curve {
