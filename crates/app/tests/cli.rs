@@ -429,7 +429,7 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
         }
     }
     let scaling = v["scaling"].as_array().unwrap();
-    assert_eq!(scaling.len(), 9, "3 sizes × (flat, bvh, obvhs)");
+    assert_eq!(scaling.len(), 18, "(3 particle + 3 mountain sizes) × (flat, bvh, obvhs)");
     let targets = v["targets"].as_array().unwrap();
     for t in [
         "flat build speed-up over bvh build_par",

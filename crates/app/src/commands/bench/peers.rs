@@ -177,10 +177,15 @@ fn slab(org: Vec3, inv: Vec3, lo: Vec3, hi: Vec3, tmin: f32, tmax: f32) -> Optio
     let a = (lo - org) * inv;
     let b = (hi - org) * inv;
     // NaN (0 · ∞ on a face plane) falls out of min/max towards the other operand.
+    // A hit's t comes from the triangle test and a box's from the slabs: the two round
+    // differently, and on Sponza a hit sat 1e-5 (relative) before its box's computed entry, so
+    // the loop skipped it. Boxes are therefore widened by 1e-4 relative on both ends: a few
+    // extra nodes, and the closest hit is never culled.
+    const SLACK: f32 = 1e-4;
     let near = a.min(b).max_element().max(tmin);
-    // Rounding in the slab distances must not drop a box the ray grazes (pbrt's 1 + 2γ₃).
-    let far = (a.max(b).min_element() * (1.0 + 4.0 * f32::EPSILON)).min(tmax);
-    (near <= far).then_some(near)
+    let far = a.max(b).min_element();
+    let (near, far) = (near - SLACK * near.abs(), (far + SLACK * far.abs()).min(tmax));
+    (near <= far).then_some(near.max(tmin))
 }
 
 fn bvh_box(b: &BvhAabb<f32, 3>) -> (Vec3, Vec3) {

@@ -1,8 +1,11 @@
-//! Build time against triangle count: procedural particle clouds (the point model) from 100k
-//! to 2.4M triangles, built as a flat grid with the auto resolution and, with the `peers`
-//! feature, as the `bvh` crate's and obvhs' fastest BVHs. The log–log slope of build time
-//! against N says how close to linear each build is (1 = linear).
+//! Build time against triangle count, on two procedural families scaled up: particle clouds
+//! (the point model, triangles in random order: the worst case for memory locality) from 100k
+//! to 2.4M triangles, and fractal mountains (a coherent surface) from 131k to 2.1M. Each is
+//! built as a flat grid with the auto resolution and, with the `peers` feature, as the `bvh`
+//! crate's and obvhs' fastest BVHs. The log–log slope of build time against N says how close
+//! to linear each build is (1 = linear).
 
+use glam::Vec3;
 use gridrt_grid::{CostModel, GridConfig, structure};
 use gridrt_scene::procedural;
 use serde::Serialize;
@@ -13,6 +16,8 @@ use crate::commands::experiment::report::{Chart, Series, print_table, progress};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ScalePoint {
+    /// "particles" or "mountain".
+    pub scene: &'static str,
     pub structure: String,
     pub triangles: usize,
     pub build_ms: f64,
@@ -20,15 +25,19 @@ pub struct ScalePoint {
     pub ns_per_triangle: f64,
 }
 
-/// The triangle counts of the scaling run (`--quick`: small ones).
-pub fn counts(args: &BenchArgs) -> Vec<usize> {
-    if args.quick {
+/// The scenes of the scaling run: family, generator size, triangles (`--quick`: small ones).
+pub fn cases(args: &BenchArgs) -> Vec<(&'static str, Vec<[Vec3; 3]>)> {
+    let particles: Vec<usize> = if args.quick {
         vec![10_000, 20_000, 40_000]
     } else {
-        let mut v = vec![100_000, 200_000, 400_000, 800_000, 1_600_000];
-        v.push(args.scaling_max.max(1_600_000));
-        v
-    }
+        vec![100_000, 200_000, 400_000, 800_000, 1_600_000, args.scaling_max.max(1_600_000)]
+    };
+    // A fractal mountain of level L has 2·4^L triangles.
+    let levels: &[u32] = if args.quick { &[5, 6, 7] } else { &[8, 9, 10] };
+    let mut out: Vec<(&'static str, Vec<[Vec3; 3]>)> =
+        particles.into_iter().map(|n| ("particles", procedural::particles(n, 11).triangles())).collect();
+    out.extend(levels.iter().map(|&l| ("mountain", procedural::fractal_mountain(l, 3).triangles())));
+    out
 }
 
 /// The subjects whose build is scaled: the flat grid and the peers' fastest builds.
@@ -44,29 +53,30 @@ fn subjects(args: &BenchArgs) -> Vec<Subject> {
 }
 
 pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<ScalePoint>> {
-    let counts = counts(args);
     let subjects = subjects(args);
-    let pb = progress((counts.len() * subjects.len()) as u64, "scaling");
+    let cases = cases(args);
+    let pb = progress((cases.len() * subjects.len()) as u64, "scaling");
     let mut out = Vec::new();
-    for &n in &counts {
-        let tris = procedural::particles(n, 11).triangles();
+    for (scene, tris) in &cases {
+        let (scene, tris, n) = (*scene, tris.as_slice(), tris.len());
         for &s in &subjects {
             pb.set_message(format!("{} · {n} triangles", s.name()));
             let (secs, r) = best_of(args.repeat, || -> anyhow::Result<()> {
                 match s {
                     Subject::Grid(kind) => {
                         let cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
-                        structure::build(&tris, &cfg)?;
+                        structure::build(tris, &cfg)?;
                     }
                     #[cfg(feature = "peers")]
                     Subject::Peer(p) => {
-                        super::peers::build(p, &tris);
+                        super::peers::build(p, tris);
                     }
                 }
                 Ok(())
             });
             r?;
             out.push(ScalePoint {
+                scene,
                 structure: s.name(),
                 triangles: n,
                 build_ms: secs * 1e3,
@@ -79,11 +89,11 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<ScalePoint>
     Ok(out)
 }
 
-/// Least-squares slope of log(build ms) against log(N) for one structure.
-pub fn slope(points: &[ScalePoint], structure: &str) -> Option<f64> {
+/// Least-squares slope of log(build ms) against log(N) for one structure on one family.
+pub fn slope(points: &[ScalePoint], scene: &str, structure: &str) -> Option<f64> {
     let p: Vec<(f64, f64)> = points
         .iter()
-        .filter(|p| p.structure == structure && p.build_ms > 0.0)
+        .filter(|p| p.scene == scene && p.structure == structure && p.build_ms > 0.0)
         .map(|p| ((p.triangles as f64).ln(), p.build_ms.ln()))
         .collect();
     if p.len() < 2 {
@@ -96,22 +106,24 @@ pub fn slope(points: &[ScalePoint], structure: &str) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-fn structures(points: &[ScalePoint]) -> Vec<String> {
-    let mut v: Vec<String> = Vec::new();
+/// The (family, structure) series in order of appearance.
+fn series(points: &[ScalePoint]) -> Vec<(&'static str, String)> {
+    let mut v: Vec<(&'static str, String)> = Vec::new();
     for p in points {
-        if !v.contains(&p.structure) {
-            v.push(p.structure.clone());
+        if !v.iter().any(|(s, n)| *s == p.scene && *n == p.structure) {
+            v.push((p.scene, p.structure.clone()));
         }
     }
     v
 }
 
 pub fn print(points: &[ScalePoint]) {
-    println!("build time against N (procedural particles):");
+    println!("build time against N (procedural particles and mountains):");
     let rows: Vec<Vec<String>> = points
         .iter()
         .map(|p| {
             vec![
+                p.scene.to_string(),
                 p.structure.clone(),
                 p.triangles.to_string(),
                 format!("{:.1}", p.build_ms),
@@ -119,29 +131,33 @@ pub fn print(points: &[ScalePoint]) {
             ]
         })
         .collect();
-    print_table(&["structure", "triangles", "build ms", "ns/tri"], &rows);
-    for s in structures(points) {
-        if let Some(k) = slope(points, &s) {
-            println!("  {s}: log–log slope {k:.3} (1 = linear)");
+    print_table(&["scene", "structure", "triangles", "build ms", "ns/tri"], &rows);
+    for (scene, s) in series(points) {
+        if let Some(k) = slope(points, scene, &s) {
+            println!("  {scene}, {s}: log–log slope {k:.3} (1 = linear)");
         }
     }
 }
 
 pub fn chart(points: &[ScalePoint]) -> Chart {
     Chart {
-        title: "build time against triangle count (particles)".into(),
+        title: "build time against triangle count (particles, mountains)".into(),
         x_label: "triangles".into(),
         y_label: "build ms".into(),
         log_x: true,
         log_y: true,
-        series: structures(points)
+        series: series(points)
             .into_iter()
-            .map(|s| Series {
-                points: points.iter().filter(|p| p.structure == s).map(|p| (p.triangles as f64, p.build_ms)).collect(),
+            .map(|(scene, s)| Series {
+                points: points
+                    .iter()
+                    .filter(|p| p.scene == scene && p.structure == s)
+                    .map(|p| (p.triangles as f64, p.build_ms))
+                    .collect(),
                 predicted: !s.starts_with("flat"),
-                label: match slope(points, &s) {
-                    Some(k) => format!("{s} (slope {k:.2})"),
-                    None => s,
+                label: match slope(points, scene, &s) {
+                    Some(k) => format!("{s}, {scene} (slope {k:.2})"),
+                    None => format!("{s}, {scene}"),
                 },
             })
             .collect(),
