@@ -8,7 +8,7 @@
 //! own choice (guess-and-check) is reported next to the measured optimum.
 
 use glam::Vec3;
-use gridrt_grid::resolution::{choose, cubic_cells};
+use gridrt_grid::resolution::{choose, count_refs, cubic_cells};
 use gridrt_grid::{CostModel, InsertMode, Resolution};
 use gridrt_scene::procedural;
 use gridrt_scene::rays::random_rays;
@@ -17,6 +17,9 @@ use serde::Serialize;
 use super::report::{Chart, Series, fit_line, print_table, progress, save_chart, write_rows};
 use super::sweep::{Point, measure};
 use crate::cli::ExperimentArgs;
+
+/// Largest reference count a sweep point may have (2²⁷: 512 MiB of references).
+const REF_BUDGET: u64 = 1 << 27;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -67,9 +70,15 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
             for i in 0..samples {
                 let cells = lo * (hi / lo).powf(i as f64 / (samples - 1) as f64);
                 let res = cubic_cells(&bounds, cells);
-                if !points.iter().any(|p| p.resolution == res) {
-                    // Fine grids over line-like scenes can exceed the reference limit: such a
-                    // resolution is reported and left out of the sweep, not fatal.
+                // Fine grids over line-like scenes hold billions of references (each sliver's box
+                // covers thousands of cells): counted first in linear time, such a resolution is
+                // reported and left out of the sweep instead of taking minutes and gigabytes.
+                let refs = count_refs(&tris, &bounds, res, InsertMode::BoundingBox, true);
+                if refs > REF_BUDGET {
+                    pb.println(format!(
+                        "{model}, N = {n}: skipping {cells:.0} cells: {refs} references (budget {REF_BUDGET})"
+                    ));
+                } else if !points.iter().any(|p| p.resolution == res) {
                     match measure(&tris, res, &rays, None, 2) {
                         Ok(p) => points.push(p),
                         Err(e) => pb.println(format!("{model}, N = {n}: skipping {cells:.0} cells: {e}")),
