@@ -201,11 +201,22 @@ pub fn choose(
         Resolution::Line => cubic_cells(bounds, (n * r).powf(1.5).min(cap)),
         Resolution::Auto => {
             let curve = sample_curve(tris, bounds, model, mode, parallel);
-            let best = curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).expect("at least one sample");
+            let best = best_sample(&curve).expect("at least one sample");
             return ResolutionChoice { resolution: best.resolution, policy, curve };
         }
     };
     ResolutionChoice { resolution, policy, curve: Vec::new() }
+}
+
+/// The sample guess-and-check takes: the least T(m) among those a grid can hold (at most
+/// [`crate::flat::MAX_REFS`] references; for long slivers the model's optimum can lie far
+/// beyond it), else the coarsest. `None` for an empty curve.
+pub fn best_sample(curve: &[CostSample]) -> Option<&CostSample> {
+    curve
+        .iter()
+        .filter(|s| s.n_m <= crate::flat::MAX_REFS)
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+        .or_else(|| curve.iter().min_by_key(|s| s.cells))
 }
 
 /// Above this many triangles, guess-and-check estimates N_m for bounding-box insertion from a

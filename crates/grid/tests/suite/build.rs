@@ -208,3 +208,19 @@ fn guess_and_check_estimate_tracks_the_exact_count() {
         assert_eq!(est[0], resolution::count_refs(tris, &b, res[0], InsertMode::BoundingBox, true), "{name}");
     }
 }
+
+/// Long slivers: the finest samples of the cost model's interval need more references than a
+/// grid may hold; the auto resolution takes the best buildable sample, and the grid builds.
+#[test]
+fn auto_resolution_never_exceeds_the_reference_limit() {
+    let tris = tris_of(SceneKind::Slivers, 20_000);
+    let b = triangle_bounds(&tris);
+    let model = CostModel { max_cells_per_triangle: 1e4, max_cells: 1 << 27, ..CostModel::default() };
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
+    let limit = gridrt_grid::flat::MAX_REFS;
+    assert!(choice.curve.iter().any(|s| s.n_m > limit), "the test needs unbuildable samples: {:?}", choice.curve);
+    let chosen = choice.curve.iter().find(|s| s.resolution == choice.resolution).unwrap();
+    assert!(chosen.n_m <= limit, "{chosen:?}");
+    assert!(choice.curve.iter().filter(|s| s.n_m <= limit).all(|s| s.cost >= chosen.cost));
+    assert_eq!(resolution::best_sample(&choice.curve).unwrap(), chosen);
+}

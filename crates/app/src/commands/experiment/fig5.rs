@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use glam::Vec3;
 use gridrt_gpu::Tracer;
-use gridrt_grid::resolution::{cubic_cells, sample_curve, samples_at};
+use gridrt_grid::resolution::{best_sample, cubic_cells, sample_curve, samples_at};
 use gridrt_grid::{CostModel, InsertMode};
 use gridrt_scene::procedural::{self, SceneKind};
 use gridrt_scene::rays::{camera_rays, random_rays};
@@ -160,7 +160,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         let gscene = upload(ctx.as_ref(), &sc.tris)?;
         let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
         let interval = sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true);
-        let auto = interval.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).expect("a sample").resolution;
+        let auto = best_sample(&interval).expect("a sample").resolution;
         // The measured optimum often sits at or below the interval's low end, (2N·Tinter/Tstep)^⅓:
         // the sweep starts at half of it.
         let below: Vec<[u32; 3]> = (1..=BELOW)

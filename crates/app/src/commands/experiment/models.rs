@@ -40,7 +40,8 @@ pub struct Summary {
     /// Guess-and-check's choice with the survey's constants.
     pub cost_model_cells: u64,
     /// Its measured time relative to the best (1.0 = optimal).
-    pub cost_model_time_ratio: f64,
+    /// `None` when the choice holds more than the sweep's reference budget (not measured).
+    pub cost_model_time_ratio: Option<f64>,
 }
 
 fn scene(model: &str, n: usize) -> (Vec<[Vec3; 3]>, gridrt_scene::Aabb) {
@@ -87,7 +88,15 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 pb.inc(1);
             }
             let chosen = choose(&tris, &bounds, Resolution::Auto, &cost, InsertMode::BoundingBox, true);
-            let at_choice = measure(&tris, chosen.resolution, &rays, None, 2)?;
+            let choice_refs = count_refs(&tris, &bounds, chosen.resolution, InsertMode::BoundingBox, true);
+            let at_choice = if choice_refs <= REF_BUDGET {
+                Some(measure(&tris, chosen.resolution, &rays, None, 2)?)
+            } else {
+                pb.println(format!(
+                    "{model}, N = {n}: the cost model's choice holds {choice_refs} references: not timed"
+                ));
+                None
+            };
             pb.inc(1);
             let best = points.iter().min_by(|a, b| a.cpu_ns_per_ray.total_cmp(&b.cpu_ns_per_ray)).expect("points");
             summary.push(Summary {
@@ -95,8 +104,8 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 n,
                 best_cells: best.cells,
                 best_ns_per_ray: best.cpu_ns_per_ray,
-                cost_model_cells: at_choice.cells,
-                cost_model_time_ratio: at_choice.cpu_ns_per_ray / best.cpu_ns_per_ray,
+                cost_model_cells: chosen.resolution.iter().map(|&r| r as u64).product(),
+                cost_model_time_ratio: at_choice.map(|c| c.cpu_ns_per_ray / best.cpu_ns_per_ray),
             });
             let best_res = best.resolution;
             rows.extend(points.into_iter().map(|p| Row { model, n, best: p.resolution == best_res, point: p }));
@@ -151,7 +160,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                     format!("{:.2}", s.best_cells as f64 / s.n as f64),
                     format!("{:.0}", s.best_ns_per_ray),
                     s.cost_model_cells.to_string(),
-                    format!("{:.2}", s.cost_model_time_ratio),
+                    s.cost_model_time_ratio.map_or("not timed".into(), |r| format!("{r:.2}")),
                 ]
             })
             .collect::<Vec<_>>(),
