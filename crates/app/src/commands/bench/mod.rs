@@ -13,8 +13,6 @@ pub mod peers;
 pub mod scaling;
 pub mod targets;
 
-use std::time::Instant;
-
 use glam::Vec3;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_gpu::{GpuContext, Tracer};
@@ -27,7 +25,7 @@ use serde::Serialize;
 
 use super::experiment::fig5::{FigScene, default_scenes, procedural_scenes};
 use super::experiment::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use super::experiment::sweep::machine;
+use super::experiment::sweep::{best_of, machine};
 use crate::cli::BenchArgs;
 
 /// One structure on one scene.
@@ -98,19 +96,6 @@ impl Subject {
             Subject::Peer(p) => p.name().to_string(),
         }
     }
-}
-
-/// Best wall-clock seconds of `repeat` runs of `f`, and the last result.
-pub fn best_of<T>(repeat: u32, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut out = None;
-    for _ in 0..repeat.max(1) {
-        let s = Instant::now();
-        let r = f();
-        best = best.min(s.elapsed().as_secs_f64());
-        out = Some(r);
-    }
-    (best, out.expect("at least one run"))
 }
 
 /// Whether two closest hits agree: the same triangle, or both hits within 1e-5 relative t
@@ -218,12 +203,12 @@ impl Built {
 /// Measures every subject on one scene.
 fn bench_scene(
     sc: &FigScene,
+    sets: &[(&'static str, Vec<Ray>); 2],
     args: &BenchArgs,
     cost: &CostModel,
     gpu: Option<&GpuContext>,
     pb: &indicatif::ProgressBar,
 ) -> anyhow::Result<Vec<Row>> {
-    let sets = ray_sets(sc, if args.quick { args.rays.min(20_000) } else { args.rays });
     let tracer = Tracer::new();
     let gscene = match gpu {
         Some(ctx) => Some(GpuScene::new(ctx, &sc.tris)?),
@@ -233,21 +218,22 @@ fn bench_scene(
     let mut rows = Vec::new();
     for subject in Subject::all(!args.no_peers) {
         pb.set_message(format!("{} · {}", sc.name, subject.name()));
-        let (build_s, built) = best_of(args.repeat, || build(subject, &sc.tris, cost));
+        let (build_s, built) = best_of(args.repeat as usize, || build(subject, &sc.tris, cost));
         let built = built?;
         let mut mrays = [0.0; 2];
         let mut gpu_mrays = [None, None];
         let mut hits: [Vec<Hit>; 2] = Default::default();
         for (i, (_, rays)) in sets.iter().enumerate() {
-            let (s, h) = best_of(args.repeat, || built.trace(&sc.tris, rays));
+            let (s, h) = best_of(args.repeat as usize, || built.trace(&sc.tris, rays));
             mrays[i] = rays.len() as f64 / s / 1e6;
             hits[i] = h;
             if let (Built::Grid(g, _), Some(ctx), Some(scene)) = (&built, gpu, gscene.as_ref()) {
                 let gs = GpuStructure::new(ctx, g)?;
                 // Untimed warm-up: pipeline creation and first upload.
                 tracer.trace(ctx, scene, &gs, &rays[..rays.len().min(64)], Traversal::AmanatidesWoo, true)?;
-                let (s, r) =
-                    best_of(args.repeat, || tracer.trace(ctx, scene, &gs, rays, Traversal::AmanatidesWoo, true));
+                let (s, r) = best_of(args.repeat as usize, || {
+                    tracer.trace(ctx, scene, &gs, rays, Traversal::AmanatidesWoo, true)
+                });
                 r?;
                 gpu_mrays[i] = Some(rays.len() as f64 / s / 1e6);
             }
@@ -318,11 +304,25 @@ pub struct AutoPoint {
 
 /// Sweeps the flat grid's resolution from half to twice the auto choice (factors 2^(k/4)) and
 /// times both ray sets on the CPU.
-fn auto_check(sc: &FigScene, args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<AutoPoint>> {
-    let sets = ray_sets(sc, if args.quick { args.rays.min(20_000) } else { args.rays });
-    let rays: Vec<Ray> = sets.into_iter().flat_map(|(_, r)| r).collect();
+fn auto_check(
+    sc: &FigScene,
+    sets: &[(&'static str, Vec<Ray>); 2],
+    args: &BenchArgs,
+    cost: &CostModel,
+) -> anyhow::Result<Vec<AutoPoint>> {
+    let rays: Vec<Ray> = sets.iter().flat_map(|(_, r)| r.iter().copied()).collect();
     let cfg = GridConfig { cost: *cost, ..GridConfig::default() };
-    let auto = structure::build(&sc.tris, &cfg)?.1.stats.resolution;
+    // The resolution the flat build's auto policy picks, without building that grid.
+    let bounds = gridrt_grid::triangle_bounds_with(&sc.tris, cfg.build.parallel);
+    let auto = gridrt_grid::resolution::choose(
+        &sc.tris,
+        &bounds,
+        Resolution::Auto,
+        cost,
+        cfg.build.insert,
+        cfg.build.parallel,
+    )
+    .resolution;
     let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
     let mut out = Vec::new();
     for k in -4i32..=4 {
@@ -337,7 +337,7 @@ fn auto_check(sc: &FigScene, args: &BenchArgs, cost: &CostModel) -> anyhow::Resu
                 continue;
             }
         };
-        let (s, _) = best_of(args.repeat, || g.trace_batch(&sc.tris, &rays, opts, true));
+        let (s, _) = best_of(args.repeat as usize, || g.trace_batch(&sc.tris, &rays, opts, true));
         out.push(AutoPoint {
             scene: sc.name.clone(),
             triangles: sc.tris.len(),
@@ -359,22 +359,20 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(&args)?;
     let gpu = if args.no_gpu { None } else { Some(super::gpu_context()?) };
     let subjects = Subject::all(!args.no_peers).len();
-    let pb = progress((scenes.len() * subjects) as u64, "bench");
-    let mut rows = Vec::new();
+    let steps = subjects + usize::from(!args.no_auto_check);
+    let pb = progress((scenes.len() * steps) as u64, "bench");
+    let (mut rows, mut auto) = (Vec::new(), Vec::new());
     for sc in &scenes {
-        rows.extend(bench_scene(sc, &args, &cost, gpu.as_ref(), &pb)?);
-    }
-    pb.finish_and_clear();
-    let mut auto = Vec::new();
-    if !args.no_auto_check {
-        let pb = progress(scenes.len() as u64, "auto m");
-        for sc in &scenes {
-            pb.set_message(sc.name.clone());
-            auto.extend(auto_check(sc, &args, &cost)?);
+        // One pair of ray sets per scene, shared by every structure and the auto-m sweep.
+        let sets = ray_sets(sc, if args.quick { args.rays.min(20_000) } else { args.rays });
+        rows.extend(bench_scene(sc, &sets, &args, &cost, gpu.as_ref(), &pb)?);
+        if !args.no_auto_check {
+            pb.set_message(format!("{} · auto m sweep", sc.name));
+            auto.extend(auto_check(sc, &sets, &args, &cost)?);
             pb.inc(1);
         }
-        pb.finish_and_clear();
     }
+    pb.finish_and_clear();
     let scale = if args.no_scaling { Vec::new() } else { scaling::run(&args, &cost)? };
     let targets = targets::evaluate(&rows, &auto, &scale);
 

@@ -10,9 +10,10 @@ use gridrt_grid::{CostModel, GridConfig, structure};
 use gridrt_scene::procedural;
 use serde::Serialize;
 
-use super::{Subject, best_of};
+use super::Subject;
 use crate::cli::BenchArgs;
 use crate::commands::experiment::report::{Chart, Series, print_table, progress};
+use crate::commands::experiment::sweep::best_of;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ScalePoint {
@@ -61,7 +62,7 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<ScalePoint>
         let (scene, tris, n) = (*scene, tris.as_slice(), tris.len());
         for &s in &subjects {
             pb.set_message(format!("{} · {n} triangles", s.name()));
-            let (secs, r) = best_of(args.repeat, || -> anyhow::Result<()> {
+            let (secs, r) = best_of(args.repeat as usize, || -> anyhow::Result<()> {
                 match s {
                     Subject::Grid(kind) => {
                         let cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };

@@ -36,14 +36,17 @@ pub struct Point {
     pub mean_tests_per_ray: f64,
 }
 
-fn best_of(repeat: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
+/// Best wall-clock seconds of `repeat` runs of `f`, and the last run's result.
+pub fn best_of<T>(repeat: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let mut best = f64::INFINITY;
+    let mut out = None;
     for _ in 0..repeat.max(1) {
         let s = Instant::now();
-        f()?;
+        let r = f();
         best = best.min(s.elapsed().as_secs_f64());
+        out = Some(r);
     }
-    Ok(best)
+    (best, out.expect("at least one run"))
 }
 
 /// The scene on the device when there is one (each experiment uploads once per scene).
@@ -85,19 +88,15 @@ pub fn measure_config(
     let res = report.stats.resolution;
     let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
     let (_, stats) = grid.trace_batch(tris, rays, opts, true);
-    let cpu_s = best_of(repeat, || {
-        grid.trace_batch(tris, rays, opts, true);
-        Ok(())
-    })?;
+    let (cpu_s, _) = best_of(repeat, || grid.trace_batch(tris, rays, opts, true));
     let gpu_s = match gpu {
         Some(g) => {
             let gs = GpuStructure::new(g.ctx, &grid)?;
             // One untimed warm-up (pipeline creation, first upload).
             g.tracer.trace(g.ctx, g.scene, &gs, &rays[..rays.len().min(64)], opts.traversal, true)?;
-            Some(best_of(repeat, || {
-                g.tracer.trace(g.ctx, g.scene, &gs, rays, opts.traversal, true)?;
-                Ok(())
-            })?)
+            let (secs, r) = best_of(repeat, || g.tracer.trace(g.ctx, g.scene, &gs, rays, opts.traversal, true));
+            r?;
+            Some(secs)
         }
         None => None,
     };
