@@ -19,16 +19,29 @@ fn diff_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
     return f + e;
 }
 
-fn triangle_vertex(tri: u32, k: u32) -> vec3<f32> {
-    return triangles[3u * tri + k].xyz;
+struct Vertices {
+    a: vec3<f32>,
+    b: vec3<f32>,
+    c: vec3<f32>,
+}
+
+// Triangle `tri`, packed `a.xyz b.x | b.yz c.xy | c.z` in three vec4 (crates/gpu/src/upload.rs
+// `pack_triangle`, keep in sync): 9 components read, not 12. On lavapipe each component of a
+// storage read with a per-ray address costs a scalar loop over the SIMD lanes.
+fn triangle_vertices(tri: u32) -> Vertices {
+    let p = triangles[3u * tri];
+    let q = triangles[3u * tri + 1u];
+    let r = triangles[3u * tri + 2u].x;
+    return Vertices(p.xyz, vec3<f32>(p.w, q.x, q.y), vec3<f32>(q.z, q.w, r));
 }
 
 fn intersect_triangle(r: PreparedRay, tri: u32) -> TriHit {
     var out: TriHit;
     out.hit = false;
-    let a = triangle_vertex(tri, 0u) - r.org;
-    let b = triangle_vertex(tri, 1u) - r.org;
-    let c = triangle_vertex(tri, 2u) - r.org;
+    let vs = triangle_vertices(tri);
+    let a = vs.a - r.org;
+    let b = vs.b - r.org;
+    let c = vs.c - r.org;
     let ax = a[r.kx] - r.sx * a[r.kz];
     let ay = a[r.ky] - r.sy * a[r.kz];
     let bx = b[r.kx] - r.sx * b[r.kz];

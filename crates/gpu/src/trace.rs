@@ -10,7 +10,7 @@ use gridrt_scene::{Hit, Ray};
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
-use crate::layout::{GpuHit, GpuRay, GpuRayStats, GridParams};
+use crate::layout::{GpuRay, GpuRayStats, GridParams};
 use crate::shaders::compose_with;
 use crate::upload::{GpuScene, GpuStructure};
 
@@ -67,10 +67,57 @@ pub(crate) fn pipeline_walking(
     }))
 }
 
-/// Trace pipelines, created on first use per kind.
+// Hits are read back straight into `Hit`s: the WGSL `Hit` (`GpuHit`) has the same layout.
+const _: () = assert!(std::mem::size_of::<Hit>() == std::mem::size_of::<crate::layout::GpuHit>());
+
+/// Trace pipelines, created on first use per kind, and the buffers of [`Tracer::trace`],
+/// kept between calls.
 #[derive(Debug, Default)]
 pub struct Tracer {
     pipelines: Mutex<HashMap<(GridKind, u32), wgpu::ComputePipeline>>,
+    scratch: Mutex<Option<Scratch>>,
+}
+
+/// The ray, hit and stats buffers of one chunk and their readback copies, for up to
+/// `capacity` rays. Reused by every [`Tracer::trace`] call that fits: creating them per call
+/// cost a fresh allocation (page faults on a software adapter, a driver allocation on a real
+/// one) of ~60 bytes per ray each time, a third of a primary-ray trace on lavapipe.
+#[derive(Debug)]
+struct Scratch {
+    capacity: usize,
+    rays: wgpu::Buffer,
+    hits: wgpu::Buffer,
+    stats: wgpu::Buffer,
+    hits_read: wgpu::Buffer,
+    stats_read: wgpu::Buffer,
+    params: wgpu::Buffer,
+}
+
+impl Scratch {
+    fn new(ctx: &GpuContext, capacity: usize) -> Scratch {
+        let buf = |label, size: u64, usage| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let n = capacity as u64;
+        Scratch {
+            capacity,
+            rays: buf("rays", n * 32, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST),
+            hits: buf("hits", n * 16, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC),
+            stats: buf("ray stats", n * 8, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC),
+            hits_read: buf("hits readback", n * 16, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
+            stats_read: buf("stats readback", n * 8, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
+            params: ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("trace params"),
+                contents: bytemuck::bytes_of(&GridParams::default()),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            }),
+        }
+    }
 }
 
 /// Buffers one trace dispatch reads and writes.
@@ -157,26 +204,11 @@ impl Tracer {
         let chunk = (1u64 << 20).min(max_by_binding).min(max_by_dispatch).max(1) as usize;
         let code = traversal_code(traversal)?;
         let n = chunk.min(rays.len().max(1));
-        let buf = |label, size: u64, usage| {
-            ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        let rays_buf = buf("rays", (n * 32) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
-        let hits_buf = buf("hits", (n * 16) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
-        let stats_buf = buf("ray stats", (n * 8) as u64, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
-        let hits_read =
-            buf("hits readback", (n * 16) as u64, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
-        let stats_read =
-            buf("stats readback", (n * 8) as u64, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
-        let params_buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("trace params"),
-            contents: bytemuck::bytes_of(&GridParams::default()),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
+        let mut scratch = self.scratch.lock().expect("tracer scratch lock");
+        if scratch.as_ref().is_none_or(|b| b.capacity < n) {
+            *scratch = Some(Scratch::new(ctx, n));
+        }
+        let b = scratch.as_ref().expect("scratch buffers were just made");
         let mut hits = Vec::with_capacity(rays.len());
         let mut stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
@@ -184,26 +216,47 @@ impl Tracer {
             let mut p = s.params;
             p.res[3] = count;
             p.options = [code, mailbox as u32, s.params.options[2], (ci * chunk) as u32];
-            ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
-            ctx.queue.write_buffer(&rays_buf, 0, bytemuck::cast_slice(part));
+            ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
+            ctx.queue.write_buffer(&b.rays, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
-            let b = TraceBuffers {
-                params: &params_buf,
-                rays: &rays_buf,
-                hits: &hits_buf,
-                stats: &stats_buf,
+            let tb = TraceBuffers {
+                params: &b.params,
+                rays: &b.rays,
+                hits: &b.hits,
+                stats: &b.stats,
                 first: 0,
                 count,
                 traversal: code,
             };
-            self.encode(ctx, &mut enc, scene, s, &b)?;
-            enc.copy_buffer_to_buffer(&hits_buf, 0, &hits_read, 0, count as u64 * 16);
-            enc.copy_buffer_to_buffer(&stats_buf, 0, &stats_read, 0, count as u64 * 8);
+            self.encode(ctx, &mut enc, scene, s, &tb)?;
+            let (hit_bytes, stat_bytes) = (count as u64 * 16, count as u64 * 8);
+            enc.copy_buffer_to_buffer(&b.hits, 0, &b.hits_read, 0, hit_bytes);
+            enc.copy_buffer_to_buffer(&b.stats, 0, &b.stats_read, 0, stat_bytes);
             ctx.queue.submit([enc.finish()]);
-            let h: Vec<GpuHit> = read_back(ctx, &hits_read, count as u64 * 16, "hits")?;
-            let st: Vec<GpuRayStats> = read_back(ctx, &stats_read, count as u64 * 8, "ray stats")?;
-            hits.extend(h.iter().map(|h| Hit { t: h.t, triangle: h.triangle, u: h.u, v: h.v }));
-            stats.extend(st);
+            // Both maps wait on one poll, and the bytes go straight into the results.
+            let hit_slice = b.hits_read.slice(..hit_bytes);
+            let stat_slice = b.stats_read.slice(..stat_bytes);
+            let (tx, rx) = std::sync::mpsc::channel();
+            let tx2 = tx.clone();
+            hit_slice.map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send(r);
+            });
+            stat_slice.map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx2.send(r);
+            });
+            let err = |what, e: &dyn std::fmt::Display| GpuError::Readback { what, detail: e.to_string() };
+            ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| err("hits and ray stats", &e))?;
+            for _ in 0..2 {
+                rx.recv().map_err(|e| err("hits and ray stats", &e))?.map_err(|e| err("hits and ray stats", &e))?;
+            }
+            {
+                let view = hit_slice.get_mapped_range().map_err(|e| err("hits", &e))?;
+                hits.extend_from_slice(bytemuck::cast_slice::<u8, Hit>(&view));
+                let view = stat_slice.get_mapped_range().map_err(|e| err("ray stats", &e))?;
+                stats.extend_from_slice(bytemuck::cast_slice::<u8, GpuRayStats>(&view));
+            }
+            b.hits_read.unmap();
+            b.stats_read.unmap();
         }
         Ok((hits, stats))
     }

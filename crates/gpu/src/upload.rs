@@ -9,7 +9,11 @@ use wgpu::util::DeviceExt;
 use crate::context::{GpuContext, GpuError};
 use crate::layout::{GpuNode, GridParams};
 
-/// Triangles as three vec4 each (w unused).
+/// Triangles, 48 bytes each as three vec4: `a.xyz b.x | b.yz c.xy | c.z` (three pad floats).
+/// The 9 coordinates lead so a kernel reads them in 9 components, not 12: on lavapipe every
+/// storage read with a per-ray address is a scalar loop over the 8 SIMD lanes per component,
+/// and vertex reads were a third of a trace kernel's time. Keep in sync with
+/// `shaders/shared/triangle.wgsl` (`triangle_vertices`) and `shaders/shade.wgsl`.
 #[derive(Debug)]
 pub struct GpuScene {
     pub triangles: wgpu::Buffer,
@@ -34,10 +38,16 @@ pub(crate) fn storage(
 
 impl GpuScene {
     pub fn new(ctx: &GpuContext, tris: &[[Vec3; 3]]) -> Result<GpuScene, GpuError> {
-        let data: Vec<[f32; 4]> = tris.iter().flat_map(|t| t.map(|v| v.extend(0.0).to_array())).collect();
+        let data: Vec<[f32; 4]> = tris.iter().flat_map(|t| pack_triangle(t)).collect();
         let triangles = storage(ctx, "triangles", bytemuck::cast_slice(&data), wgpu::BufferUsages::empty())?;
         Ok(GpuScene { triangles, triangle_count: tris.len() as u32 })
     }
+}
+
+/// One triangle in the packed layout of [`GpuScene`].
+pub fn pack_triangle(t: &[Vec3; 3]) -> [[f32; 4]; 3] {
+    let [a, b, c] = *t;
+    [[a.x, a.y, a.z, b.x], [b.y, b.z, c.x, c.y], [c.z, 0.0, 0.0, 0.0]]
 }
 
 /// A structure's buffers: references, cell data, and the kind's extra array.
