@@ -38,7 +38,7 @@ pub(crate) fn storage(
 
 impl GpuScene {
     pub fn new(ctx: &GpuContext, tris: &[[Vec3; 3]]) -> Result<GpuScene, GpuError> {
-        let data: Vec<[f32; 4]> = tris.iter().flat_map(|t| pack_triangle(t)).collect();
+        let data: Vec<[f32; 4]> = tris.iter().flat_map(pack_triangle).collect();
         let triangles = storage(ctx, "triangles", bytemuck::cast_slice(&data), wgpu::BufferUsages::empty())?;
         Ok(GpuScene { triangles, triangle_count: tris.len() as u32 })
     }
