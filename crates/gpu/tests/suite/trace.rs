@@ -8,9 +8,10 @@
 use glam::Vec3;
 use gridrt_gpu::trace::Tracer;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_grid::multires::{MultiresOptions, Policy};
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::triangle::{PreparedRay, intersect};
-use gridrt_grid::{GridConfig, GridKind, Traversal, structure};
+use gridrt_grid::{AnyGrid, GridConfig, GridKind, Resolution, Traversal, hierarchy, structure};
 use gridrt_scene::procedural::{self, SceneKind};
 use gridrt_scene::rays::{camera_rays, random_rays};
 use gridrt_scene::{Camera, Mesh, Ray};
@@ -71,10 +72,17 @@ impl Tally {
 }
 
 fn compare(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind]) -> Tally {
-    compare_with(name, tris, rays, kinds, &[false, true])
+    compare_with(name, tris, rays, kinds, &[false, true], &GridConfig::default())
 }
 
-fn compare_with(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind], mailboxes: &[bool]) -> Tally {
+fn compare_with(
+    name: &str,
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    kinds: &[GridKind],
+    mailboxes: &[bool],
+    base: &GridConfig,
+) -> Tally {
     let ctx = gpu().expect("checked by caller");
     let scene = GpuScene::new(ctx, tris).unwrap();
     let tracer = Tracer::new();
@@ -82,7 +90,7 @@ fn compare_with(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind]
     let scale = b.min.abs().max(b.max.abs()).max_element().max(b.diagonal());
     let mut tally = Tally::default();
     for &kind in kinds {
-        let (grid, _) = structure::build(tris, &GridConfig { kind, ..GridConfig::default() }).unwrap();
+        let (grid, _) = structure::build(tris, &GridConfig { kind, ..*base }).unwrap();
         let gs = GpuStructure::new(ctx, &grid).unwrap();
         for traversal in Traversal::EXACT {
             for &mailbox in mailboxes {
@@ -201,9 +209,46 @@ fn gpu_matches_cpu_on_shared_scenes() {
     for p in paths {
         let (mesh, _) = gridrt_scene::gltf_load::load_path(&p).unwrap();
         let name = p.file_name().unwrap().to_string_lossy().to_string();
-        let t = compare_with(&name, &mesh.triangles(), &rays_for(&mesh, RAYS), &GridKind::ALL, &[true]);
+        let t = compare_with(
+            &name,
+            &mesh.triangles(),
+            &rays_for(&mesh, RAYS),
+            &GridKind::ALL,
+            &[true],
+            &GridConfig::default(),
+        );
         total.add(&t);
     }
     println!("total: {total:?}");
     check_totals(&total);
+}
+
+/// The hierarchy kernel keeps its saved parent levels in named variables (one per depth, a
+/// switch picks one): a multi-resolution grid as deep as the builders allow must use them all.
+#[test]
+fn gpu_matches_cpu_through_the_deepest_hierarchy() {
+    if gpu().is_none() {
+        return;
+    }
+    let mesh = procedural::generate(SceneKind::Particles, 3000, 5).mesh;
+    let tris = mesh.triangles();
+    let cfg = GridConfig {
+        resolution: Some(Resolution::Explicit([2, 2, 2])),
+        multires: MultiresOptions {
+            policy: Policy::Octree,
+            max_depth: hierarchy::MAX_DEPTH as u32 - 1,
+            always_subdivide: true,
+            ..MultiresOptions::default()
+        },
+        ..GridConfig::default()
+    };
+    let (grid, _) = structure::build(&tris, &GridConfig { kind: GridKind::Multires, ..cfg }).unwrap();
+    let levels = match &grid {
+        AnyGrid::Multires(h) => h.stats().levels,
+        _ => unreachable!("built a multires grid"),
+    };
+    assert_eq!(levels, hierarchy::MAX_DEPTH as u32, "the test hierarchy must reach the deepest level");
+    let t =
+        compare_with("deep particles", &tris, &rays_for(&mesh, 20_000), &[GridKind::Multires], &[false, true], &cfg);
+    check_totals(&t);
 }
