@@ -21,7 +21,17 @@ struct Walker {
     k: vec2<i32>,
     end: vec2<i32>,
     last: vec2<i32>,
-    queue: array<vec3<i32>, 8>,
+    // The slice's queue of LIU_QUEUE cells, in named members (liu_queue_store/load): an
+    // array<vec3<i32>, 8> indexed by the queue position is per-lane scratch memory on
+    // lavapipe, read and written lane by lane; a switch over named members stays in registers.
+    q0: vec3<i32>,
+    q1: vec3<i32>,
+    q2: vec3<i32>,
+    q3: vec3<i32>,
+    q4: vec3<i32>,
+    q5: vec3<i32>,
+    q6: vec3<i32>,
+    q7: vec3<i32>,
     queued: u32,
     emitted: u32,
     // Output of walker_next.
@@ -75,10 +85,36 @@ fn liu_target(x: i32, s: i32, c: i32, hi: i32) -> i32 {
     return t;
 }
 
+fn liu_queue_store(w: ptr<function, Walker>, i: u32, c: vec3<i32>) {
+    switch i {
+        case 0u: { (*w).q0 = c; }
+        case 1u: { (*w).q1 = c; }
+        case 2u: { (*w).q2 = c; }
+        case 3u: { (*w).q3 = c; }
+        case 4u: { (*w).q4 = c; }
+        case 5u: { (*w).q5 = c; }
+        case 6u: { (*w).q6 = c; }
+        default: { (*w).q7 = c; }
+    }
+}
+
+fn liu_queue_load(w: ptr<function, Walker>, i: u32) -> vec3<i32> {
+    switch i {
+        case 0u: { return (*w).q0; }
+        case 1u: { return (*w).q1; }
+        case 2u: { return (*w).q2; }
+        case 3u: { return (*w).q3; }
+        case 4u: { return (*w).q4; }
+        case 5u: { return (*w).q5; }
+        case 6u: { return (*w).q6; }
+        default: { return (*w).q7; }
+    }
+}
+
 fn liu_fill_slice(w: ptr<function, Walker>) {
     let v = (*w).v;
     let ww = (*w).w;
-    (*w).queue[0] = (*w).cell;
+    (*w).q0 = (*w).cell;
     (*w).queued = 1u;
     (*w).emitted = 0u;
     let sv = (*w).step[v];
@@ -106,7 +142,7 @@ fn liu_fill_slice(w: ptr<function, Walker>) {
         } else {
             (*w).cell[ww] += sw;
         }
-        (*w).queue[(*w).queued] = (*w).cell;
+        liu_queue_store(w, (*w).queued, (*w).cell);
         (*w).queued += 1u;
     }
 }
@@ -183,7 +219,7 @@ fn walker_next(w: ptr<function, Walker>) -> bool {
         (*w).done = true;
         return false;
     }
-    let c = (*w).queue[(*w).emitted];
+    let c = liu_queue_load(w, (*w).emitted);
     (*w).emitted += 1u;
     (*w).out_cell = c;
     (*w).out_t_exit = exit_of_cell((*w).g, c);
