@@ -483,7 +483,7 @@ fn charts(args: &BenchArgs, scenes: &[FigScene], rows: &[Row], scale: &[scaling:
             &args.out,
             stem,
             &Chart {
-                title: format!("{label}: grids (solid) vs BVHs (dashed)"),
+                title: format!("{label}: grids (filled) vs BVHs (hollow)"),
                 x_label: "scene (by triangle count)".into(),
                 y_label: label.into(),
                 log_x: false,

@@ -53,7 +53,8 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
-    /// Drawn dashed (predictions) instead of solid (measurements).
+    /// Drawn dashed (predictions, or a comparison's other family) instead of solid; on category
+    /// charts (`x_names`), hollow marks instead of filled ones.
     pub predicted: bool,
 }
 
@@ -73,8 +74,9 @@ pub struct Chart {
     pub x_names: Option<Vec<String>>,
 }
 
-/// Colours that stay apart on white (no yellow).
-const PALETTE: [RGBColor; 7] = [
+/// Colours that stay apart on white (no yellow): ten, so bench's ten structures per scene
+/// never share one.
+const PALETTE: [RGBColor; 10] = [
     RGBColor(214, 39, 40),
     RGBColor(31, 119, 180),
     RGBColor(44, 160, 44),
@@ -82,6 +84,9 @@ const PALETTE: [RGBColor; 7] = [
     RGBColor(255, 127, 14),
     RGBColor(23, 190, 207),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
 ];
 
 fn tr(v: f64, log: bool) -> f64 {
@@ -130,7 +135,11 @@ where
         (y0, y1) = (y0 - 0.5, y1 + 0.5);
     }
     let pad = (y1 - y0) * 0.05;
-    let (y0, y1) = (if c.log_y { y0 - pad } else { (y0 - pad).min(0.0) }, y1 + pad);
+    // Headroom for the legend (upper right, ~17 px per entry on a 560 px chart), so it does not
+    // cover the highest points.
+    let entries = (c.series.len() + c.markers.len()) as f64;
+    let top = (y1 - y0) * (0.07 * entries).max(0.05);
+    let (y0, y1) = (if c.log_y { y0 - pad } else { (y0 - pad).min(0.0) }, y1 + top);
     let mut chart = ChartBuilder::on(&root)
         .caption(&c.title, ("sans-serif", 22))
         .margin(12)
@@ -138,8 +147,19 @@ where
         .y_label_area_size(70)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(err)?;
+    // Category names (scene file names) overlap at the default size when there are many: the
+    // label font shrinks so the longest name fits its slot (900 px wide charts).
+    let x_font = match &c.x_names {
+        Some(names) if !names.is_empty() => {
+            let longest = names.iter().map(|n| n.chars().count()).max().unwrap_or(1).max(1) as f64;
+            let slot = 780.0 / names.len() as f64;
+            (slot / (0.55 * longest)).clamp(8.0, 15.0) as u32
+        }
+        _ => 15,
+    };
     chart
         .configure_mesh()
+        .x_label_style(("sans-serif", x_font))
         .x_desc(&c.x_label)
         .y_desc(&c.y_label)
         .x_label_formatter(&|v| match &c.x_names {
@@ -159,17 +179,16 @@ where
             .map(|&(x, y)| (tr(x, c.log_x), tr(y, c.log_y)))
             .collect();
         let style = ShapeStyle { color, filled: false, stroke_width: 2 };
-        if s.predicted {
-            chart.draw_series(DashedLineSeries::new(data, 6, 4, style)).map_err(err)?
-        } else if c.x_names.is_some() {
+        if c.x_names.is_some() {
             // Categories: marks only (a line between scenes would mean nothing), each series
-            // shifted a little so equal values stay visible side by side.
-            let filled = ShapeStyle { filled: true, ..style };
+            // shifted a little so equal values stay visible side by side; `predicted` series
+            // (the comparison's other family) get hollow marks.
+            let mark = ShapeStyle { filled: !s.predicted, ..style };
             let shift = (i as f64 - (c.series.len() as f64 - 1.0) / 2.0) * 0.6 / c.series.len().max(1) as f64;
             let data: Vec<(f64, f64)> = data.into_iter().map(|(x, y)| (x + shift, y)).collect();
-            chart
-                .draw_series(PointSeries::of_element(data, 6, filled, &|p, r, st| Circle::new(p, r, st)))
-                .map_err(err)?
+            chart.draw_series(PointSeries::of_element(data, 6, mark, &|p, r, st| Circle::new(p, r, st))).map_err(err)?
+        } else if s.predicted {
+            chart.draw_series(DashedLineSeries::new(data, 6, 4, style)).map_err(err)?
         } else {
             let marks = data.clone();
             chart
