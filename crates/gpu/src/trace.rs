@@ -209,13 +209,34 @@ impl Tracer {
             *scratch = Some(Scratch::new(ctx, n));
         }
         let b = scratch.as_ref().expect("scratch buffers were just made");
+        let out = self.trace_chunks(ctx, scene, s, rays, chunk, [code, mailbox as u32], b);
+        if out.is_err() {
+            // A failed readback may leave a buffer mapped: the next call starts afresh.
+            *scratch = None;
+        }
+        out
+    }
+
+    /// [`Tracer::trace`]'s chunk loop over `b`: `chunk` rays per dispatch, `options` =
+    /// [traversal code, mailbox].
+    #[allow(clippy::too_many_arguments)]
+    fn trace_chunks(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        s: &GpuStructure,
+        rays: &[Ray],
+        chunk: usize,
+        [code, mailbox]: [u32; 2],
+        b: &Scratch,
+    ) -> Result<(Vec<Hit>, Vec<GpuRayStats>), GpuError> {
         let mut hits = Vec::with_capacity(rays.len());
         let mut stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
             let count = part.len() as u32;
             let mut p = s.params;
             p.res[3] = count;
-            p.options = [code, mailbox as u32, s.params.options[2], (ci * chunk) as u32];
+            p.options = [code, mailbox, s.params.options[2], (ci * chunk) as u32];
             ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
             ctx.queue.write_buffer(&b.rays, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
