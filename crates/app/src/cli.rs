@@ -179,6 +179,8 @@ fn parse_resolution(s: &str) -> Result<Resolution, String> {
 impl GridArgs {
     pub fn cost_model(&self) -> anyhow::Result<CostModel> {
         let d = CostModel::default();
+        // Only the native build reads a saved calibration into `m`.
+        #[cfg_attr(target_arch = "wasm32", allow(unused_mut))]
         let mut m = CostModel {
             t_setup: self.t_setup.unwrap_or(d.t_setup),
             t_step: self.t_step.unwrap_or(d.t_step),

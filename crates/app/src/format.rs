@@ -1,7 +1,8 @@
 //! Small formatting helpers shared by the command line and the app.
 
-/// "12.3 MiB" style.
-/// Today's date (UTC) as YYYY-MM-DD, from the system clock.
+/// Today's date (UTC) as YYYY-MM-DD, from the system clock (for the commands' reports; the
+/// browser build has no commands).
+#[cfg(not(target_arch = "wasm32"))]
 pub fn today() -> String {
     let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
     let (y, m, d) = civil_from_days((secs / 86_400) as i64);
@@ -9,6 +10,7 @@ pub fn today() -> String {
 }
 
 /// Gregorian date of a day count since 1970-01-01 (Howard Hinnant's algorithm).
+#[cfg(not(target_arch = "wasm32"))]
 fn civil_from_days(z: i64) -> (i64, u32, u32) {
     let z = z + 719_468;
     let era = z.div_euclid(146_097);
@@ -21,6 +23,7 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
     (yoe + era * 400 + i64::from(m <= 2), m, d)
 }
 
+/// "12.3 MiB" style.
 pub fn human_bytes(b: u64) -> String {
     let b = b as f64;
     if b >= 1024.0 * 1024.0 {
