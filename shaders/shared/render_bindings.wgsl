@@ -37,7 +37,7 @@ fn camera_ray(cam: Camera, x: u32, y: u32) -> Ray {
     return Ray(vec4<f32>(cam.eye.xyz, 0.0), vec4<f32>(d, inf()));
 }
 
-// The geometric normal of triangle `tri` (vertices packed in three vec4 in `verts`, see shade.wgsl).
+// The point at parameter t along r.
 fn hit_point(r: Ray, t: f32) -> vec3<f32> {
     return r.origin_tmin.xyz + r.dir_tmax.xyz * t;
 }
