@@ -50,12 +50,10 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let r = primary[i];
-    // Packed a.xyz b.x | b.yz c.xy | c.z (crates/gpu/src/upload.rs `pack_triangle`).
-    let v0 = verts[3u * h.triangle];
-    let v1 = verts[3u * h.triangle + 1u];
-    let a = v0.xyz;
-    let b = vec3<f32>(v0.w, v1.x, v1.y);
-    let c = vec3<f32>(v1.z, v1.w, verts[3u * h.triangle + 2u].x);
+    let vs = unpack_triangle(verts[3u * h.triangle], verts[3u * h.triangle + 1u], verts[3u * h.triangle + 2u].x);
+    let a = vs.a;
+    let b = vs.b;
+    let c = vs.c;
     var n = normalize(cross(b - a, c - a));
     let dir = normalize(r.dir_tmax.xyz);
     if dot(n, dir) > 0.0 {

@@ -19,20 +19,10 @@ fn diff_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
     return f + e;
 }
 
-struct Vertices {
-    a: vec3<f32>,
-    b: vec3<f32>,
-    c: vec3<f32>,
-}
-
-// Triangle `tri`, packed `a.xyz b.x | b.yz c.xy | c.z` in three vec4 (crates/gpu/src/upload.rs
-// `pack_triangle`, keep in sync): 9 components read, not 12. On lavapipe each component of a
-// storage read with a per-ray address costs a scalar loop over the SIMD lanes.
+// Triangle `tri` (packed, see `unpack_triangle`): 9 components read, not 12. On lavapipe each
+// component of a storage read with a per-ray address costs a scalar loop over the SIMD lanes.
 fn triangle_vertices(tri: u32) -> Vertices {
-    let p = triangles[3u * tri];
-    let q = triangles[3u * tri + 1u];
-    let r = triangles[3u * tri + 2u].x;
-    return Vertices(p.xyz, vec3<f32>(p.w, q.x, q.y), vec3<f32>(q.z, q.w, r));
+    return unpack_triangle(triangles[3u * tri], triangles[3u * tri + 1u], triangles[3u * tri + 2u].x);
 }
 
 fn intersect_triangle(r: PreparedRay, tri: u32) -> TriHit {

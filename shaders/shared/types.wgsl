@@ -22,6 +22,20 @@ struct RayStats {
     tests: u32,
 }
 
+// A triangle's vertices, packed `a.xyz b.x | b.yz c.xy | c.z` in three vec4 (48 bytes; the 9
+// coordinates lead, so a kernel reads 9 components, not 12). Keep in sync with
+// crates/gpu/src/upload.rs `pack_triangle`.
+struct Vertices {
+    a: vec3<f32>,
+    b: vec3<f32>,
+    c: vec3<f32>,
+}
+
+// The vertices from a triangle's first two vec4 and the x of its third.
+fn unpack_triangle(p: vec4<f32>, q: vec4<f32>, r: f32) -> Vertices {
+    return Vertices(p.xyz, vec3<f32>(p.w, q.x, q.y), vec3<f32>(q.z, q.w, r));
+}
+
 // Per-dispatch parameters. Mirrors `GridParams`.
 struct Params {
     // xyz: grid box minimum (world units).

@@ -255,22 +255,10 @@ impl Tracer {
             enc.copy_buffer_to_buffer(&b.stats, 0, &b.stats_read, 0, stat_bytes);
             ctx.queue.submit([enc.finish()]);
             // Both maps wait on one poll, and the bytes go straight into the results.
-            let hit_slice = b.hits_read.slice(..hit_bytes);
-            let stat_slice = b.stats_read.slice(..stat_bytes);
-            let (tx, rx) = std::sync::mpsc::channel();
-            let tx2 = tx.clone();
-            hit_slice.map_async(wgpu::MapMode::Read, move |r| {
-                let _ = tx.send(r);
-            });
-            stat_slice.map_async(wgpu::MapMode::Read, move |r| {
-                let _ = tx2.send(r);
-            });
-            let err = |what, e: &dyn std::fmt::Display| GpuError::Readback { what, detail: e.to_string() };
-            ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| err("hits and ray stats", &e))?;
-            for _ in 0..2 {
-                rx.recv().map_err(|e| err("hits and ray stats", &e))?.map_err(|e| err("hits and ray stats", &e))?;
-            }
+            let [hit_slice, stat_slice] =
+                map_for_reading(ctx, [(&b.hits_read, hit_bytes), (&b.stats_read, stat_bytes)], "hits and ray stats")?;
             {
+                let err = |what, e: &dyn std::fmt::Display| GpuError::Readback { what, detail: e.to_string() };
                 let view = hit_slice.get_mapped_range().map_err(|e| err("hits", &e))?;
                 hits.extend_from_slice(bytemuck::cast_slice::<u8, Hit>(&view));
                 let view = stat_slice.get_mapped_range().map_err(|e| err("ray stats", &e))?;
@@ -305,20 +293,33 @@ pub fn read_back<T: bytemuck::Pod>(
     size: u64,
     what: &'static str,
 ) -> Result<Vec<T>, GpuError> {
-    let slice = buffer.slice(..size);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| GpuError::Readback { what, detail: e.to_string() })?;
-    rx.recv()
-        .map_err(|e| GpuError::Readback { what, detail: e.to_string() })?
-        .map_err(|e| GpuError::Readback { what, detail: e.to_string() })?;
+    let [slice] = map_for_reading(ctx, [(buffer, size)], what)?;
     let view = slice.get_mapped_range().map_err(|e| GpuError::Readback { what, detail: e.to_string() })?;
     let out = bytemuck::cast_slice(&view).to_vec();
     drop(view);
     buffer.unmap();
     Ok(out)
+}
+
+/// Maps the first `size` bytes of each MAP_READ buffer for reading, waiting once for all of
+/// them, and returns the mapped slices.
+fn map_for_reading<'a, const N: usize>(
+    ctx: &GpuContext,
+    buffers: [(&'a wgpu::Buffer, u64); N],
+    what: &'static str,
+) -> Result<[wgpu::BufferSlice<'a>; N], GpuError> {
+    let err = |e: &dyn std::fmt::Display| GpuError::Readback { what, detail: e.to_string() };
+    let slices = buffers.map(|(buffer, size)| buffer.slice(..size));
+    let (tx, rx) = std::sync::mpsc::channel();
+    for slice in &slices {
+        let tx = tx.clone();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+    }
+    ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| err(&e))?;
+    for _ in 0..N {
+        rx.recv().map_err(|e| err(&e))?.map_err(|e| err(&e))?;
+    }
+    Ok(slices)
 }

@@ -13,7 +13,7 @@ use crate::layout::{GpuNode, GridParams};
 /// The 9 coordinates lead so a kernel reads them in 9 components, not 12: on lavapipe every
 /// storage read with a per-ray address is a scalar loop over the 8 SIMD lanes per component,
 /// and vertex reads were a third of a trace kernel's time. Keep in sync with
-/// `shaders/shared/triangle.wgsl` (`triangle_vertices`) and `shaders/shade.wgsl`.
+/// `shaders/shared/types.wgsl` (`unpack_triangle`).
 #[derive(Debug)]
 pub struct GpuScene {
     pub triangles: wgpu::Buffer,
