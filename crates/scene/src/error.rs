@@ -91,6 +91,15 @@ pub enum SceneError {
     TooLarge { source_name: String, what: &'static str, count: u64, limit: u64 },
     #[error("{source_name}: {detail}")]
     Unsupported { source_name: String, detail: String },
+    /// Over a load limit ([`crate::gltf_load::LoadLimits`]); `flag` raises it.
+    #[error("{source_name}: over the load limits: {detail} (raise it with {flag})")]
+    OverBudget { source_name: String, detail: String, flag: &'static str },
+    #[error("{source_name}: animation {animation}{}: {detail}", sampler.map(|s| format!(", sampler {s}")).unwrap_or_default())]
+    InvalidAnimation { source_name: String, animation: usize, sampler: Option<usize>, detail: String },
+    #[error("{source_name}: skin {skin}: {detail}")]
+    InvalidSkin { source_name: String, skin: usize, detail: String },
+    #[error("{source_name}: {at}: morph targets: {detail}")]
+    InvalidMorphTargets { source_name: String, at: PrimitiveRef, detail: String },
 }
 
 #[derive(Debug, Error)]

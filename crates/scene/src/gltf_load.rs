@@ -15,10 +15,12 @@
 //! never produce a hit. Primitives of other modes (points, lines) are skipped and reported.
 //!
 //! # Robustness
-//! Accessors are read here with explicit bounds checks rather than through the `gltf` crate's
-//! readers, so that every malformed file gets a [`SceneError`] naming the mesh, primitive and
-//! accessor at fault instead of a panic, and so that absurd element counts are rejected before
-//! anything is allocated.
+//! Before a buffer is read, [`crate::gltf_file`] checks the container, the JSON and the buffer
+//! URIs, and [`crate::load_budget`] counts what the document would allocate (instancing through
+//! the node graph included) against [`LoadLimits`]. Accessors are read with explicit bounds
+//! checks ([`crate::accessor`]) and animation and skin data are validated
+//! ([`crate::animation_data`]), so every malformed file gets a [`SceneError`] naming the node,
+//! mesh, primitive or accessor at fault instead of a panic, an abort or a hang.
 
 use std::path::Path;
 
@@ -26,11 +28,12 @@ use glam::{DMat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
+use crate::accessor::{AccessorFault, read_components, read_uint, view_bytes};
 use crate::error::{PrimitiveRef, SceneError};
+pub use crate::gltf_file::MAX_FILE_BYTES;
+use crate::gltf_file::{map_gltf_error, precheck, precheck_external_buffers, read_file_bounded, validate};
+pub use crate::load_budget::LoadLimits;
 use crate::mesh::{LoadReport, Mesh};
-
-/// Largest scene file read (also bounds external buffers).
-pub const MAX_FILE_BYTES: u64 = 2 << 30;
 /// Largest number of triangles in one flattened scene (indices must fit in `u32` with room for
 /// the "no hit" marker `0xFFFF_FFFF`).
 pub const MAX_TRIANGLES: u64 = 1 << 28;
@@ -41,224 +44,60 @@ pub const MAX_COORDINATE: f32 = 1e30;
 pub const MAX_NODE_DEPTH: usize = 256;
 
 /// Loads a `.gltf` or `.glb` file; external buffers are resolved next to it.
+/// With the default [`LoadLimits`].
 pub fn load_path(path: &Path) -> Result<(Mesh, LoadReport), SceneError> {
+    load_path_with(path, &LoadLimits::default())
+}
+
+/// Loads a `.gltf` or `.glb` file within `limits`; external buffers are resolved next to it.
+pub fn load_path_with(path: &Path, limits: &LoadLimits) -> Result<(Mesh, LoadReport), SceneError> {
     let name = path.display().to_string();
-    let bytes = read_file_bounded(path, &name)?;
-    load_slice(&bytes, &name, path.parent())
+    let bytes = read_file_bounded(path, &name, limits)?;
+    load_slice_with(&bytes, &name, path.parent(), limits)
 }
 
-fn read_file_bounded(path: &Path, name: &str) -> Result<Vec<u8>, SceneError> {
-    let io = |err| SceneError::Io { source_name: name.to_string(), err };
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        return Err(SceneError::Io {
-            source_name: name.to_string(),
-            err: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"),
-        });
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(SceneError::TooLarge {
-            source_name: name.to_string(),
-            what: "file size in bytes",
-            count: meta.len(),
-            limit: MAX_FILE_BYTES,
-        });
-    }
-    std::fs::read(path).map_err(io)
-}
-
-/// Loads glTF from memory. `source_name` is used in errors and the report; `base_dir` resolves
-/// external buffer URIs (`None`: only embedded data and the GLB chunk are allowed).
+/// Loads glTF from memory with the default [`LoadLimits`].
 pub fn load_slice(bytes: &[u8], source_name: &str, base_dir: Option<&Path>) -> Result<(Mesh, LoadReport), SceneError> {
+    load_slice_with(bytes, source_name, base_dir, &LoadLimits::default())
+}
+
+/// Loads glTF from memory within `limits`. `source_name` is used in errors and the report;
+/// `base_dir` resolves external buffer URIs (`None`: only embedded data and the GLB chunk are
+/// allowed).
+pub fn load_slice_with(
+    bytes: &[u8],
+    source_name: &str,
+    base_dir: Option<&Path>,
+    limits: &LoadLimits,
+) -> Result<(Mesh, LoadReport), SceneError> {
     let name = source_name.to_string();
     precheck(bytes, &name)?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| map_gltf_error(e, &name))?;
     let doc = gltf.document;
     validate(&doc, &name)?;
+    let roots = root_nodes(&doc);
+    let plan = crate::load_budget::check(&doc, &roots, limits, bytes.len() as u64, &name)?;
     precheck_external_buffers(&doc, base_dir, &name)?;
     let buffers = gltf::import_buffers(&doc, base_dir, gltf.blob).map_err(|e| map_gltf_error(e, &name))?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|d| &d.0[..]).collect();
-    Loader { name, doc: &doc, buffers }.load()
+    crate::animation_data::validate(&doc, &buffers, &name)?;
+    Loader { name, doc: &doc, buffers }.load(&roots, plan)
 }
 
-/// Classifies the file before handing it to the `gltf` crate, so that the common failure
-/// modes (not glTF at all, a cut-off download) get a precise message.
-fn precheck(bytes: &[u8], name: &str) -> Result<(), SceneError> {
-    if bytes.starts_with(b"glTF") {
-        if bytes.len() < 12 {
-            return Err(SceneError::TruncatedGlb {
-                source_name: name.into(),
-                detail: format!("{} bytes, shorter than the 12-byte header", bytes.len()),
-            });
-        }
-        let word = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
-        let version = word(4);
-        if version != 2 {
-            return Err(SceneError::Unsupported {
-                source_name: name.into(),
-                detail: format!("glb container version {version}; only glTF 2.0 is supported"),
-            });
-        }
-        let declared = word(8) as usize;
-        if declared > bytes.len() {
-            return Err(SceneError::TruncatedGlb {
-                source_name: name.into(),
-                detail: format!("header declares {declared} bytes, file has {}", bytes.len()),
-            });
-        }
-        // Walk the chunks: each must fit inside the declared length.
-        let mut o = 12;
-        let mut first = true;
-        while o < declared {
-            if o + 8 > declared {
-                return Err(SceneError::TruncatedGlb {
-                    source_name: name.into(),
-                    detail: format!("chunk header at byte {o} is cut off"),
-                });
-            }
-            let len = word(o) as usize;
-            let kind = word(o + 4);
-            if o + 8 + len > declared {
-                return Err(SceneError::TruncatedGlb {
-                    source_name: name.into(),
-                    detail: format!("chunk at byte {o} declares {len} bytes, only {} remain", declared - o - 8),
-                });
-            }
-            if first && kind != 0x4E4F_534A {
-                return Err(SceneError::InvalidGlb {
-                    source_name: name.into(),
-                    detail: format!("first chunk has type 0x{kind:08X}, expected JSON"),
-                });
-            }
-            first = false;
-            o += 8 + len;
-        }
-        if first {
-            return Err(SceneError::InvalidGlb { source_name: name.into(), detail: "no JSON chunk".into() });
-        }
-        return Ok(());
-    }
-    match bytes.iter().find(|b| !b.is_ascii_whitespace()) {
-        Some(b'{') => Ok(()),
-        Some(_) if bytes.len() >= 4 => Err(SceneError::NotGltf {
-            source_name: name.into(),
-            detail: format!("starts with bytes {:02X?}", &bytes[..4]),
-        }),
-        _ => Err(SceneError::NotGltf {
-            source_name: name.into(),
-            detail: format!("{} bytes, no glTF header or JSON object", bytes.len()),
-        }),
-    }
-}
-
-/// The `gltf` crate's validation (every index reference in range, required fields present),
-/// except that a POSITION accessor's missing `min`/`max` is tolerated: the spec requires them,
-/// but many exporters omit them and gridrt computes bounds itself.
-fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneError> {
-    use gltf::json::validation::{Error, Validate};
-    let root = doc.as_json();
-    // gltf-json 1.4's validator indexes `accessors[POSITION]` unchecked and panics on a dangling
-    // index: check those references first.
-    for (mi, mesh) in root.meshes.iter().enumerate() {
-        for (pi, prim) in mesh.primitives.iter().enumerate() {
-            for (sem, acc) in &prim.attributes {
-                if acc.value() >= root.accessors.len() {
-                    return Err(SceneError::InvalidJson {
-                        source_name: name.into(),
-                        detail: format!(
-                            "meshes[{mi}].primitives[{pi}].attributes[{sem:?}]: accessor {} does not exist ({} accessors)",
-                            acc.value(),
-                            root.accessors.len()
-                        ),
-                    });
+/// The root nodes of the default scene (or scene 0 when none is marked default; or, in a file
+/// with no scenes, every node that is nobody's child), in order.
+fn root_nodes(doc: &gltf::Document) -> Vec<usize> {
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().map(|n| n.index()).collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
                 }
             }
+            (0..is_child.len()).filter(|&i| !is_child[i]).collect()
         }
-    }
-    let mut errors = Vec::new();
-    root.validate(root, gltf::json::Path::new, &mut |path, err| {
-        let p = path().to_string();
-        let min_max = p.ends_with(".min") || p.ends_with(".max");
-        if !(min_max && matches!(err, Error::Missing)) {
-            errors.push((p, err));
-        }
-    });
-    if errors.is_empty() {
-        return Ok(());
-    }
-    let detail = errors.iter().take(5).map(|(p, e)| format!("{p}: {e}")).collect::<Vec<_>>().join("; ");
-    Err(SceneError::InvalidJson { source_name: name.into(), detail })
-}
-
-fn precheck_external_buffers(doc: &gltf::Document, base_dir: Option<&Path>, name: &str) -> Result<(), SceneError> {
-    for buffer in doc.buffers() {
-        if let gltf::buffer::Source::Uri(uri) = buffer.source() {
-            if uri.starts_with("data:") {
-                continue;
-            }
-            let Some(base) = base_dir else {
-                return Err(SceneError::Buffer {
-                    source_name: name.into(),
-                    buffer: buffer.index(),
-                    detail: format!("external file \"{uri}\" but no directory to resolve it in"),
-                });
-            };
-            let path = base.join(uri);
-            // A URI naming a device or directory would hang or fail obscurely inside the reader.
-            match std::fs::metadata(&path) {
-                Ok(m) if !m.is_file() => {
-                    return Err(SceneError::Buffer {
-                        source_name: name.into(),
-                        buffer: buffer.index(),
-                        detail: format!("\"{}\" is not a regular file", path.display()),
-                    });
-                }
-                Ok(m) if m.len() > MAX_FILE_BYTES => {
-                    return Err(SceneError::TooLarge {
-                        source_name: name.into(),
-                        what: "external buffer size in bytes",
-                        count: m.len(),
-                        limit: MAX_FILE_BYTES,
-                    });
-                }
-                Ok(_) => {}
-                Err(e) => {
-                    return Err(SceneError::Buffer {
-                        source_name: name.into(),
-                        buffer: buffer.index(),
-                        detail: format!("cannot open \"{}\": {e}", path.display()),
-                    });
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
-fn map_gltf_error(e: gltf::Error, name: &str) -> SceneError {
-    let name = name.to_string();
-    match e {
-        gltf::Error::Binary(b) => SceneError::InvalidGlb { source_name: name, detail: b.to_string() },
-        gltf::Error::Deserialize(j) => SceneError::InvalidJson { source_name: name, detail: j.to_string() },
-        gltf::Error::Validation(list) => {
-            let detail = list.iter().take(5).map(|(path, err)| format!("{path}: {err}")).collect::<Vec<_>>().join("; ");
-            SceneError::InvalidJson { source_name: name, detail }
-        }
-        gltf::Error::BufferLength { buffer, expected, actual } => SceneError::Buffer {
-            source_name: name,
-            buffer,
-            detail: format!("declares {expected} bytes but only {actual} are available"),
-        },
-        gltf::Error::MissingBlob => SceneError::Buffer {
-            source_name: name,
-            buffer: 0,
-            detail: "refers to the .glb BIN chunk, which is missing".into(),
-        },
-        gltf::Error::Base64(err) => {
-            SceneError::Buffer { source_name: name, buffer: 0, detail: format!("bad base64 data URI: {err}") }
-        }
-        gltf::Error::Io(err) => SceneError::Io { source_name: name, err },
-        other => SceneError::Unsupported { source_name: name, detail: other.to_string() },
     }
 }
 
@@ -277,20 +116,7 @@ struct LocalPrimitive {
 }
 
 impl Loader<'_> {
-    fn load(&self) -> Result<(Mesh, LoadReport), SceneError> {
-        let roots: Vec<gltf::Node> = match self.doc.default_scene().or_else(|| self.doc.scenes().next()) {
-            Some(scene) => scene.nodes().collect(),
-            None => {
-                let mut is_child = vec![false; self.doc.nodes().len()];
-                for n in self.doc.nodes() {
-                    for c in n.children() {
-                        is_child[c.index()] = true;
-                    }
-                }
-                self.doc.nodes().filter(|n| !is_child[n.index()]).collect()
-            }
-        };
-
+    fn load(&self, roots: &[usize], plan: crate::load_budget::Plan) -> Result<(Mesh, LoadReport), SceneError> {
         let mut report = LoadReport { source: self.name.clone(), ..Default::default() };
         // Decode every mesh once, in document order.
         let mut meshes: Vec<Vec<Option<LocalPrimitive>>> = Vec::new();
@@ -309,10 +135,20 @@ impl Loader<'_> {
         }
         report.meshes = meshes.len();
 
+        // The budget was checked: reserve the flattened mesh once, and turn an allocator refusal
+        // (an address-space limit) into an error rather than an abort.
         let mut out = Mesh::default();
+        let reserve = |what: &'static str, e: std::collections::TryReserveError| SceneError::OverBudget {
+            source_name: self.name.clone(),
+            detail: format!("cannot allocate the flattened mesh's {what}: {e}"),
+            flag: "--max-load-bytes",
+        };
+        out.positions.try_reserve_exact(plan.vertices as usize).map_err(|e| reserve("vertices", e))?;
+        out.indices.try_reserve_exact(plan.triangles as usize).map_err(|e| reserve("triangles", e))?;
         let mut path = Vec::new();
-        for root in roots {
-            self.visit(&root, DMat4::IDENTITY, &meshes, &mut out, &mut path)?;
+        let nodes: Vec<gltf::Node> = self.doc.nodes().collect();
+        for &root in roots {
+            self.visit(&nodes[root], DMat4::IDENTITY, &meshes, &mut out, &mut path)?;
         }
         if out.indices.is_empty() {
             let detail = if report.skipped_primitives.is_empty() {
@@ -473,180 +309,54 @@ impl Loader<'_> {
         SceneError::TooLarge { source_name: self.name.clone(), what, count, limit }
     }
 
-    /// Bounds-checked view of `count` elements of `elem` bytes at `offset` in `view`.
-    /// Returns the byte slice and the stride.
-    fn element_bytes(
-        &self,
-        view: &gltf::buffer::View,
-        offset: usize,
-        count: usize,
-        elem: usize,
-        ctx: AccessorCtx<'_>,
-    ) -> Result<(&[u8], usize), SceneError> {
+    /// Turns an [`AccessorFault`] into the error naming this accessor.
+    fn fault(&self, f: AccessorFault, ctx: AccessorCtx<'_>) -> SceneError {
         let AccessorCtx { at, accessor, semantic } = ctx;
-        let oob = |detail: String| SceneError::AccessorOutOfBounds {
-            source_name: self.name.clone(),
-            at: at.clone(),
-            accessor,
-            semantic,
-            detail,
-        };
-        let stride = view.stride().unwrap_or(elem);
-        if stride < elem {
-            return Err(SceneError::InvalidAccessor {
-                source_name: self.name.clone(),
-                at: at.clone(),
-                accessor,
-                semantic,
-                detail: format!("byteStride {stride} is smaller than the element size {elem}"),
-            });
+        let (source_name, at) = (self.name.clone(), at.clone());
+        match f {
+            AccessorFault::OutOfBounds(detail) => {
+                SceneError::AccessorOutOfBounds { source_name, at, accessor, semantic, detail }
+            }
+            AccessorFault::Invalid(detail) => {
+                SceneError::InvalidAccessor { source_name, at, accessor, semantic, detail }
+            }
         }
-        let buffer = view.buffer().index();
-        let data = self.buffers.get(buffer).copied().ok_or_else(|| oob(format!("buffer {buffer} missing")))?;
-        let view_end = view.offset().checked_add(view.length());
-        if view_end.is_none_or(|e| e > data.len()) {
-            return Err(oob(format!(
-                "buffer view {} spans bytes {}..{} of a {}-byte buffer",
-                view.index(),
-                view.offset(),
-                view.offset() as u128 + view.length() as u128,
-                data.len()
-            )));
-        }
-        let view_bytes = &data[view.offset()..view.offset() + view.length()];
-        if count == 0 {
-            return Ok((&[], stride));
-        }
-        // u128: a crafted count can overflow u64 arithmetic on 32-bit targets.
-        let need = offset as u128 + stride as u128 * (count as u128 - 1) + elem as u128;
-        if need > view_bytes.len() as u128 {
-            return Err(oob(format!(
-                "{count} elements of {elem} bytes (stride {stride}, offset {offset}) need {need} \
-                 bytes, buffer view {} has {}",
-                view.index(),
-                view_bytes.len()
-            )));
-        }
-        Ok((&view_bytes[offset..need as usize], stride))
     }
 
     fn read_positions(&self, acc: &gltf::Accessor, at: &PrimitiveRef) -> Result<Vec<Vec3>, SceneError> {
-        let count = acc.count();
-        if count as u64 > MAX_TRIANGLES * 3 {
-            return Err(self.too_large("POSITION count", count as u64, MAX_TRIANGLES * 3));
-        }
-        let read3 = |b: &[u8]| {
-            Vec3::new(
-                f32::from_le_bytes(b[0..4].try_into().unwrap()),
-                f32::from_le_bytes(b[4..8].try_into().unwrap()),
-                f32::from_le_bytes(b[8..12].try_into().unwrap()),
-            )
-        };
-        let mut out = match acc.view() {
-            Some(view) => {
-                let (bytes, stride) = self.element_bytes(
-                    &view,
-                    acc.offset(),
-                    count,
-                    12,
-                    AccessorCtx { at, accessor: acc.index(), semantic: "POSITION" },
-                )?;
-                (0..count).map(|i| read3(&bytes[i * stride..])).collect()
-            }
-            // No buffer view: the spec says the data is all zeros (sparse may replace some).
-            None => vec![Vec3::ZERO; count],
-        };
-        if let Some(sparse) = acc.sparse() {
-            let n = sparse.count();
-            if n > count {
-                return Err(SceneError::InvalidAccessor {
-                    source_name: self.name.clone(),
-                    at: at.clone(),
-                    accessor: acc.index(),
-                    semantic: "POSITION",
-                    detail: format!("sparse count {n} exceeds the accessor count {count}"),
-                });
-            }
-            let idx_info = sparse.indices();
-            let isize = match idx_info.index_type() {
-                gltf::accessor::sparse::IndexType::U8 => 1,
-                gltf::accessor::sparse::IndexType::U16 => 2,
-                gltf::accessor::sparse::IndexType::U32 => 4,
-            };
-            let (ib, _) = self.element_bytes(
-                &idx_info.view(),
-                idx_info.offset(),
-                n,
-                isize,
-                AccessorCtx { at, accessor: acc.index(), semantic: "POSITION sparse indices" },
-            )?;
-            let vals = sparse.values();
-            let (vb, _) = self.element_bytes(
-                &vals.view(),
-                vals.offset(),
-                n,
-                12,
-                AccessorCtx { at, accessor: acc.index(), semantic: "POSITION sparse values" },
-            )?;
-            for k in 0..n {
-                let target = read_uint(&ib[k * isize..], isize) as usize;
-                if target >= count {
-                    return Err(SceneError::InvalidAccessor {
-                        source_name: self.name.clone(),
-                        at: at.clone(),
-                        accessor: acc.index(),
-                        semantic: "POSITION",
-                        detail: format!("sparse index {k} is {target}, accessor count is {count}"),
-                    });
-                }
-                out[target] = read3(&vb[k * 12..]);
-            }
-        }
-        Ok(out)
+        let ctx = AccessorCtx { at, accessor: acc.index(), semantic: "POSITION" };
+        let c = read_components(&self.buffers, acc).map_err(|f| self.fault(f, ctx))?;
+        Ok(c.chunks_exact(3).map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect())
     }
 
     fn read_indices(&self, acc: &gltf::Accessor, at: &PrimitiveRef) -> Result<Vec<u32>, SceneError> {
+        let invalid = |detail: String| SceneError::InvalidAccessor {
+            source_name: self.name.clone(),
+            at: at.clone(),
+            accessor: acc.index(),
+            semantic: "indices",
+            detail,
+        };
         let size = match acc.data_type() {
             DataType::U8 => 1,
             DataType::U16 => 2,
             DataType::U32 => 4,
-            other => {
-                return Err(SceneError::InvalidAccessor {
-                    source_name: self.name.clone(),
-                    at: at.clone(),
-                    accessor: acc.index(),
-                    semantic: "indices",
-                    detail: format!("component type {other:?}; indices must be unsigned integers"),
-                });
-            }
+            other => return Err(invalid(format!("component type {other:?}; indices must be unsigned integers"))),
         };
         if acc.dimensions() != Dimensions::Scalar || acc.sparse().is_some() {
-            return Err(SceneError::InvalidAccessor {
-                source_name: self.name.clone(),
-                at: at.clone(),
-                accessor: acc.index(),
-                semantic: "indices",
-                detail: format!(
-                    "type {:?}{}; indices must be a non-sparse SCALAR accessor",
-                    acc.dimensions(),
-                    if acc.sparse().is_some() { " (sparse)" } else { "" }
-                ),
-            });
+            return Err(invalid(format!(
+                "type {:?}{}; indices must be a non-sparse SCALAR accessor",
+                acc.dimensions(),
+                if acc.sparse().is_some() { " (sparse)" } else { "" }
+            )));
         }
         let count = acc.count();
-        if count as u64 > MAX_TRIANGLES * 3 {
-            return Err(self.too_large("index count", count as u64, MAX_TRIANGLES * 3));
-        }
         let Some(view) = acc.view() else {
             return Ok(vec![0; count]);
         };
-        let (bytes, stride) = self.element_bytes(
-            &view,
-            acc.offset(),
-            count,
-            size,
-            AccessorCtx { at, accessor: acc.index(), semantic: "indices" },
-        )?;
+        let ctx = AccessorCtx { at, accessor: acc.index(), semantic: "indices" };
+        let (bytes, stride) =
+            view_bytes(&self.buffers, &view, acc.offset(), count, size).map_err(|f| self.fault(f, ctx))?;
         Ok((0..count).map(|i| read_uint(&bytes[i * stride..], size)).collect())
     }
 }
@@ -657,14 +367,6 @@ struct AccessorCtx<'a> {
     at: &'a PrimitiveRef,
     accessor: usize,
     semantic: &'static str,
-}
-
-fn read_uint(b: &[u8], size: usize) -> u32 {
-    match size {
-        1 => b[0] as u32,
-        2 => u16::from_le_bytes([b[0], b[1]]) as u32,
-        _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-    }
 }
 
 /// Turns an index sequence into triangles following the glTF rules for each mode (see the

@@ -1,10 +1,14 @@
 //! Scenes for gridrt: glTF loading, procedural generators, cameras, rays and the binary
 //! ray/hit file formats. Everything downstream (grids, GPU, app) starts from a [`Mesh`].
 
+pub(crate) mod accessor;
+pub(crate) mod animation_data;
 pub mod camera;
 pub mod error;
 pub mod glb_write;
+pub mod gltf_file;
 pub mod gltf_load;
+pub mod load_budget;
 pub mod mesh;
 pub mod procedural;
 pub mod rays;
@@ -12,6 +16,7 @@ pub mod rng;
 
 pub use camera::Camera;
 pub use error::{RayFileError, SceneError};
+pub use load_budget::LoadLimits;
 pub use mesh::{Aabb, LoadReport, Mesh};
 pub use rays::{Hit, NO_HIT, Ray};
 

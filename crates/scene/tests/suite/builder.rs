@@ -21,7 +21,7 @@ impl Doc {
         }
     }
 
-    fn push(&mut self, key: &str, v: Value) -> usize {
+    pub fn push(&mut self, key: &str, v: Value) -> usize {
         let arr = self.json[key].as_array_mut().unwrap();
         arr.push(v);
         arr.len() - 1
@@ -35,6 +35,21 @@ impl Doc {
         let off = self.bin.len();
         self.bin.extend_from_slice(bytes);
         self.push("bufferViews", json!({"buffer": 0, "byteOffset": off, "byteLength": bytes.len()}))
+    }
+
+    /// An accessor over new bytes (used by tests/hostile.rs): `component_type` (5121 u8, 5123 u16, 5125 u32, 5126 f32),
+    /// `count` elements of type `ty` ("SCALAR", "VEC3", "MAT4", …).
+    #[allow(dead_code)]
+    pub fn accessor(&mut self, bytes: &[u8], component_type: u32, count: usize, ty: &str) -> usize {
+        let v = self.view(bytes);
+        self.push("accessors", json!({"bufferView": v, "componentType": component_type, "count": count, "type": ty}))
+    }
+
+    /// A float accessor: `values.len() / components` elements of type `ty`.
+    #[allow(dead_code)]
+    pub fn floats(&mut self, values: &[f32], ty: &str, components: usize) -> usize {
+        let bytes: Vec<u8> = values.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.accessor(&bytes, 5126, values.len() / components, ty)
     }
 
     pub fn positions(&mut self, p: &[[f32; 3]]) -> usize {

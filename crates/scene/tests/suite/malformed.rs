@@ -80,7 +80,7 @@ fn malformed_corpus_gives_specific_errors() {
     case(
         "absurd accessor count",
         with_json(Doc::single_triangle(), |j| j["accessors"][0]["count"] = json!(4_000_000_000u64)),
-        &|e| matches!(e, SceneError::TooLarge { .. }),
+        &|e| matches!(e, SceneError::OverBudget { flag: "--max-load-bytes", .. }),
     );
     case(
         "byteStride smaller than a VEC3",
