@@ -20,6 +20,13 @@ pub struct Cli {
     /// Worker threads for parallel builds and tracing (default: all cores).
     #[arg(long, global = true)]
     pub threads: Option<usize>,
+    /// Most triangles a scene may have after instancing (default 2^26 = 67108864).
+    #[arg(long, global = true, value_parser = parse_count)]
+    pub max_triangles: Option<u64>,
+    /// Most bytes loading one scene may allocate, e.g. 512M or 8G (default: a quarter of
+    /// physical memory, at most half the address-space limit).
+    #[arg(long, global = true, value_parser = parse_bytes)]
+    pub max_load_bytes: Option<u64>,
     #[command(flatten)]
     pub app: AppArgs,
     #[command(subcommand)]
@@ -42,8 +49,8 @@ pub struct AppArgs {
     #[arg(long, value_parser = parse_grid)]
     pub grid: Option<GridKind>,
     /// View to start with: shaded, normals, depth, heatmap-cells, heatmap-tests.
-    #[arg(long)]
-    pub view: Option<String>,
+    #[arg(long, value_parser = parse_view)]
+    pub view: Option<gridrt_gpu::View>,
     /// Traversal to start with: aw, cw or liu.
     #[arg(long, value_parser = parse_traversal)]
     pub traversal: Option<Traversal>,
@@ -51,7 +58,7 @@ pub struct AppArgs {
     #[arg(long, value_parser = parse_camera)]
     pub camera: Option<gridrt_scene::Camera>,
     /// Rendered pixels per screen pixel, 0.05..=1 (default: saved setting; 1 in smoke mode).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_render_scale)]
     pub render_scale: Option<f32>,
     /// Windows to open at start (repeatable): cost-model, explainer.
     #[arg(long, value_enum)]
@@ -160,6 +167,9 @@ pub struct GridArgs {
     /// twolevel: leaf-grid cells per triangle (λ₂).
     #[arg(long, default_value_t = TwoLevelOptions::default().leaf_density)]
     pub leaf_density: f64,
+    /// Most cells a structure may have (all levels), whatever chose its resolution.
+    #[arg(long, default_value_t = CostModel::default().max_cells, value_parser = parse_count)]
+    pub max_cells: u64,
 }
 
 fn parse_grid(s: &str) -> Result<GridKind, String> {
@@ -186,6 +196,7 @@ impl GridArgs {
             t_step: self.t_step.unwrap_or(d.t_step),
             t_inter: self.t_inter.unwrap_or(d.t_inter),
             samples: self.samples,
+            max_cells: self.max_cells,
             ..d
         };
         #[cfg(not(target_arch = "wasm32"))]
@@ -289,7 +300,7 @@ pub struct RaysArgs {
     #[arg(long, value_enum)]
     pub kind: RayKind,
     /// Number of rays.
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 100_000, value_parser = parse_ray_count)]
     pub count: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -361,8 +372,8 @@ pub struct RenderArgs {
     /// Camera: auto (frames the scene bounds) or eye_x,eye_y,eye_z,target_x,target_y,target_z,fov.
     #[arg(long, default_value = "auto", allow_hyphen_values = true)]
     pub camera: String,
-    /// Count at the top of the heatmap colour scale.
-    #[arg(long, default_value_t = 64.0)]
+    /// Count at the top of the heatmap colour scale (positive).
+    #[arg(long, default_value_t = 64.0, value_parser = parse_heat_max)]
     pub heat_max: f32,
     /// Output PNG.
     #[arg(short, long)]
@@ -399,7 +410,7 @@ pub struct ExperimentArgs {
     #[arg(long, default_value = "out/experiments")]
     pub out: PathBuf,
     /// Rays per measurement.
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 100_000, value_parser = parse_ray_count)]
     pub rays: usize,
     /// Fewer and smaller cases (a smoke run in seconds).
     #[arg(long)]
@@ -436,10 +447,10 @@ pub struct BenchArgs {
     #[arg(long, conflicts_with = "scenes")]
     pub procedural: bool,
     /// Rays per set (camera rays and random rays, each).
-    #[arg(long, default_value_t = 250_000)]
+    #[arg(long, default_value_t = 250_000, value_parser = parse_ray_count)]
     pub rays: usize,
     /// Repetitions of every build and trace (the best is reported).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeat: u32,
     /// Output folder for the CSV, JSON, SVG and PNG files.
     #[arg(long, default_value = "out/bench")]
@@ -474,13 +485,13 @@ pub struct BenchTraceArgs {
     #[command(flatten)]
     pub grid: GridArgs,
     /// Rays per set (primary and random).
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = parse_ray_count)]
     pub rays: usize,
     /// Traversal: aw, cw or liu.
     #[arg(long, default_value = "aw", value_parser = parse_traversal)]
     pub traversal: Traversal,
     /// Repetitions (the best is reported).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeat: u32,
     /// Print JSON.
     #[arg(long)]
@@ -489,4 +500,67 @@ pub struct BenchTraceArgs {
 
 fn parse_camera(s: &str) -> Result<gridrt_scene::Camera, String> {
     gridrt_scene::Camera::parse(s)
+}
+
+/// A count of at least 1.
+fn parse_count(s: &str) -> Result<u64, String> {
+    match s.trim().parse::<u64>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("expected a whole number of at least 1, got \"{s}\"")),
+    }
+}
+
+/// Rays to make: at least 1, at most what a quarter of memory holds (32 bytes each, and the hits).
+fn parse_ray_count(s: &str) -> Result<usize, String> {
+    let n = parse_count(s)?;
+    let max = gridrt_scene::load_budget::default_max_bytes() / 48;
+    if n > max {
+        return Err(format!("{n} rays need {} bytes with their hits; at most {max} fit in the memory budget", n * 48));
+    }
+    Ok(n as usize)
+}
+
+/// Bytes, optionally with a binary suffix: 1048576, 512K, 64M, 8G, 1T.
+pub fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (digits, shift) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => {
+            let shift = match c.to_ascii_uppercase() {
+                'K' => 10,
+                'M' => 20,
+                'G' => 30,
+                'T' => 40,
+                _ => return Err(format!("unknown unit in \"{s}\": use K, M, G or T")),
+            };
+            (&t[..i], shift)
+        }
+        _ => (t, 0),
+    };
+    let n: u64 = digits.trim().parse().map_err(|_| format!("expected bytes such as 512M or 8G, got \"{s}\""))?;
+    n.checked_mul(1 << shift).filter(|&b| b >= 1).ok_or_else(|| format!("\"{s}\" is not a usable number of bytes"))
+}
+
+fn parse_heat_max(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("the heatmap scale must be a positive number, got \"{s}\"")),
+    }
+}
+
+fn parse_render_scale(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if (0.05..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("the render scale must be in 0.05..=1, got \"{s}\"")),
+    }
+}
+
+impl Cli {
+    /// The scene load limits these flags describe.
+    pub fn load_limits(&self) -> gridrt_scene::LoadLimits {
+        let d = gridrt_scene::LoadLimits::default();
+        gridrt_scene::LoadLimits {
+            max_triangles: self.max_triangles.unwrap_or(d.max_triangles),
+            max_bytes: self.max_load_bytes.unwrap_or(d.max_bytes),
+        }
+    }
 }

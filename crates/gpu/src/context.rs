@@ -10,6 +10,12 @@
 //! (scenes are big) but keeps WebGPU's default of 8 storage buffers per stage, so the same
 //! shaders run in a browser. A scene whose buffers exceed the limits gets
 //! [`GpuError::BufferTooLarge`] naming the buffer, never a device loss.
+//!
+//! Errors the device reports outside an error scope (validation, out of memory) are collected
+//! rather than left to wgpu's default handler, which panics: [`GpuContext::check_device`] turns
+//! them into [`GpuError::Device`], and the app shows them.
+
+use std::sync::{Arc, Mutex};
 
 use thiserror::Error;
 
@@ -39,6 +45,8 @@ pub enum GpuError {
     Shader(#[from] crate::shaders::ComposeError),
     #[error("{0}")]
     Unsupported(String),
+    #[error("the GPU device reported: {0}")]
+    Device(String),
 }
 
 /// A device and queue with what is known about them.
@@ -48,6 +56,21 @@ pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Uncaptured device errors since the last [`GpuContext::check_device`].
+    device_errors: Arc<Mutex<Vec<String>>>,
+}
+
+/// Routes `device`'s uncaptured errors into a list instead of wgpu's panicking default.
+fn collect_device_errors(device: &wgpu::Device) -> Arc<Mutex<Vec<String>>> {
+    let errors = Arc::new(Mutex::new(Vec::new()));
+    let sink = errors.clone();
+    device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+        if let Ok(mut v) = sink.lock() {
+            // The first line names the failed call; the rest repeats the labels.
+            v.push(e.to_string().lines().next().unwrap_or("unknown error").to_string());
+        }
+    }));
+    errors
 }
 
 /// The limits gridrt asks for, within what `adapter` offers.
@@ -91,13 +114,15 @@ impl GpuContext {
             .request_device(&desc)
             .await
             .map_err(|source| GpuError::RequestDevice { adapter: info.name.clone(), source })?;
-        Ok(GpuContext { adapter, device, queue, info })
+        let device_errors = collect_device_errors(&device);
+        Ok(GpuContext { adapter, device, queue, info, device_errors })
     }
 
     /// Wraps a device created elsewhere (eframe's), sharing it.
     pub fn from_parts(adapter: wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue) -> GpuContext {
         let info = adapter.get_info();
-        GpuContext { adapter, device, queue, info }
+        let device_errors = collect_device_errors(&device);
+        GpuContext { adapter, device, queue, info, device_errors }
     }
 
     /// "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)".
@@ -108,6 +133,18 @@ impl GpuContext {
             .find(|s| !s.is_empty())
             .map_or("unnamed adapter", |s| s.as_str());
         format!("{name} ({:?}, {:?})", self.info.backend, self.info.device_type)
+    }
+
+    /// The device errors reported since the last call, as one [`GpuError::Device`].
+    pub fn check_device(&self) -> Result<(), GpuError> {
+        let errors = std::mem::take(
+            &mut *self.device_errors.lock().map_err(|_| GpuError::Device("error list poisoned".into()))?,
+        );
+        match errors.len() {
+            0 => Ok(()),
+            1 => Err(GpuError::Device(errors[0].clone())),
+            k => Err(GpuError::Device(format!("{} (and {} more)", errors[0], k - 1))),
+        }
     }
 
     /// Checks one buffer against the device limits.

@@ -4,10 +4,12 @@
 //! heatmaps map 0 … `heat_max` onto a fixed colour scale (black, blue, cyan, green, yellow,
 //! red, white).
 //!
-//! A [`FrameTarget`] holds the buffers of one image size and is reused frame after frame (the
-//! app re-renders on every camera move). With a display texture, a last pass
-//! (`present.wgsl`) copies the pixels into it and sums the per-ray stats on the GPU, so the app
-//! reads back 32 bytes per frame instead of the per-pixel buffers.
+//! A frame is rendered in tiles of consecutive pixels: a [`FrameTarget`] holds the per-pixel
+//! buffers of one tile (at most [`FrameTarget::tile_capacity`] pixels, within the device's
+//! binding and dispatch limits), so any image up to [`MAX_IMAGE_SIDE`] per side renders on any
+//! adapter. [`Renderer::render`] reads each tile back as it finishes. With a display texture
+//! (the app), a last pass (`present.wgsl`) copies each tile's pixels into the full-size texture
+//! and sums the per-ray stats on the GPU, so the app reads back 32 bytes per frame.
 
 use gridrt_grid::Traversal;
 use gridrt_scene::{Aabb, Camera, Hit};
@@ -15,7 +17,7 @@ use gridrt_scene::{Aabb, Camera, Hit};
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
 use crate::layout::{FrameTotals, GpuHit, GpuRayStats, GridParams, ShadeParams};
-use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, tile_quantum, traversal_code};
+use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, traversal_code};
 use crate::upload::{GpuScene, GpuStructure};
 
 /// What the image shows (`--view`).
@@ -92,11 +94,17 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// what egui expects of a texture it samples (it blends in gamma space).
 pub const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-/// Buffers for frames of one size, reused across frames; optionally a display texture.
+/// Most pixels in one tile: 2^20 keeps a tile's buffers near 120 MB.
+pub const MAX_TILE_PIXELS: u32 = 1 << 20;
+
+/// Buffers for frames of one size, reused across frames: the per-pixel buffers of one tile,
+/// and optionally the full-size display texture.
 #[derive(Debug)]
 pub struct FrameTarget {
     pub width: u32,
     pub height: u32,
+    /// Pixels the per-pixel buffers hold: the largest tile.
+    capacity: u32,
     camera: wgpu::Buffer,
     shade: wgpu::Buffer,
     trace_params: wgpu::Buffer,
@@ -126,10 +134,14 @@ impl FrameTarget {
         if n == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
             return Err(GpuError::Unsupported(format!("image size {width}x{height} (1..={MAX_IMAGE_SIDE} per side)")));
         }
-        ctx.check_buffer("camera rays", n * 32, true)?;
-        if n > ctx.device.limits().max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64 {
-            return Err(GpuError::Unsupported(format!("{n} pixels exceed one dispatch")));
+        let max_side = ctx.device.limits().max_texture_dimension_2d;
+        if display && (width > max_side || height > max_side) {
+            return Err(GpuError::Unsupported(format!(
+                "frame size {width}x{height}: this device's textures are at most {max_side} pixels per side"
+            )));
         }
+        let capacity = (n.min(tile_limit(ctx) as u64)) as u32;
+        let n = capacity as u64;
         let dev = &ctx.device;
         let buf = |label, size: u64, usage| {
             dev.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
@@ -153,16 +165,17 @@ impl FrameTarget {
         Ok(FrameTarget {
             width,
             height,
+            capacity,
             camera: buf("camera", size_of::<crate::layout::GpuCamera>() as u64, U::UNIFORM | U::COPY_DST),
             shade: buf("shade params", size_of::<ShadeParams>() as u64, U::UNIFORM | U::COPY_DST),
             trace_params: buf("trace params", size_of::<GridParams>() as u64, U::UNIFORM | U::COPY_DST),
-            rays: buf("primary rays", n * 32, storage),
-            hits: buf("primary hits", n * 16, storage | U::COPY_SRC),
-            stats: buf("primary stats", n * 8, storage | U::COPY_SRC),
-            shadow_rays: buf("shadow rays", n * 32, storage),
-            shadow_hits: buf("shadow hits", n * 16, storage),
-            shadow_stats: buf("shadow stats", n * 8, storage),
-            pixels: buf("pixels", n * 4, storage | U::COPY_SRC),
+            rays: buf("primary rays (tile)", n * 32, storage),
+            hits: buf("primary hits (tile)", n * 16, storage | U::COPY_SRC),
+            stats: buf("primary stats (tile)", n * 8, storage | U::COPY_SRC),
+            shadow_rays: buf("shadow rays (tile)", n * 32, storage),
+            shadow_hits: buf("shadow hits (tile)", n * 16, storage),
+            shadow_stats: buf("shadow stats (tile)", n * 8, storage),
+            pixels: buf("pixels (tile)", n * 4, storage | U::COPY_SRC),
             totals: buf("frame totals", size_of::<FrameTotals>() as u64, storage | U::COPY_SRC | U::COPY_DST),
             totals_read: buf("frame totals readback", size_of::<FrameTotals>() as u64, U::MAP_READ | U::COPY_DST),
             texture,
@@ -172,6 +185,11 @@ impl FrameTarget {
     /// Pixels per frame.
     pub fn pixel_count(&self) -> u64 {
         self.width as u64 * self.height as u64
+    }
+
+    /// Most pixels one tile may have ([`Renderer::encode_tile`]).
+    pub fn tile_capacity(&self) -> u32 {
+        self.capacity
     }
 
     /// A sampling view of the display texture (for egui); `None` without a texture.
@@ -195,6 +213,17 @@ impl FrameTarget {
         self.totals_read.unmap();
         Ok(t)
     }
+}
+
+/// Largest tile this device can run: every per-pixel binding (32-byte rays the largest) within
+/// the storage-binding and buffer limits, one dispatch, at most [`MAX_TILE_PIXELS`]; a multiple
+/// of the workgroup size.
+pub fn tile_limit(ctx: &GpuContext) -> u32 {
+    let l = ctx.device.limits();
+    let by_binding = l.max_storage_buffer_binding_size.min(l.max_buffer_size) / 32;
+    let by_dispatch = l.max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64;
+    let n = by_binding.min(by_dispatch).min(MAX_TILE_PIXELS as u64) as u32;
+    (n / WORKGROUP * WORKGROUP).max(WORKGROUP)
 }
 
 /// The shading constants of a frame: light, view, heatmap scale, depth range.
@@ -248,12 +277,13 @@ impl Renderer {
     /// Records pixels `[first, first + count)` of a frame (row-major) into `enc`: camera rays,
     /// trace, shadow rays and trace (shaded view), shading, and for a display target the copy
     /// into the texture and the stats totals (cleared by the tile at pixel 0, copied to
-    /// `totals_read` by the last tile). The per-pixel buffers are bound from `first`.
+    /// `totals_read` by the last tile). The tile's pixels land at the start of the target's
+    /// per-pixel buffers; `count` is at most [`FrameTarget::tile_capacity`].
     ///
-    /// Uniforms are written through the queue, so **each tile must be submitted before the
-    /// next one is encoded**. Tiles keep each submission short: the app stays responsive on a
-    /// software adapter, and a browser never sees a dispatch long enough to lose the device.
-    /// `first` must be a multiple of [`tile_quantum`].
+    /// Uniforms and per-pixel buffers are shared by all tiles, so **each tile must be submitted
+    /// before the next one is encoded** (the queue runs them in order). Tiles keep each
+    /// submission short: the app stays responsive on a software adapter, and a browser never
+    /// sees a dispatch long enough to lose the device.
     #[allow(clippy::too_many_arguments)]
     pub fn encode_tile(
         &self,
@@ -274,10 +304,10 @@ impl Renderer {
             )));
         }
         let n = t.pixel_count();
-        if count == 0 || first as u64 + count as u64 > n || !first.is_multiple_of(tile_quantum(ctx)) {
+        if count == 0 || count > t.capacity || first as u64 + count as u64 > n {
             return Err(GpuError::Unsupported(format!(
-                "tile of {count} pixels at {first} in a frame of {n} (tiles start at multiples of {})",
-                tile_quantum(ctx)
+                "tile of {count} pixels at {first} in a frame of {n} (at most {} per tile)",
+                t.capacity
             )));
         }
         let code = traversal_code(o.traversal)?;
@@ -313,7 +343,7 @@ impl Renderer {
             pass.set_bind_group(0, bg, &[]);
             pass.dispatch_workgroups(groups, 1, 1);
         };
-        let r = |buf, stride| range(buf, first, count, stride);
+        let r = |buf, stride| range(buf, 0, count, stride);
         let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), r(&t.rays, 32), b(&t.shade)]);
         run(enc, &self.camera, &camera_bg, "camera rays");
         let primary = TraceBuffers {
@@ -321,7 +351,7 @@ impl Renderer {
             rays: &t.rays,
             hits: &t.hits,
             stats: &t.stats,
-            first,
+            first: 0,
             count,
             traversal: code,
         };
@@ -338,7 +368,7 @@ impl Renderer {
                 rays: &t.shadow_rays,
                 hits: &t.shadow_hits,
                 stats: &t.shadow_stats,
-                first,
+                first: 0,
                 count,
                 traversal: code,
             };
@@ -386,7 +416,7 @@ impl Renderer {
         Ok(())
     }
 
-    /// Renders one frame and reads it back.
+    /// Renders one frame tile by tile, reading each tile back as it finishes.
     pub fn render(
         &self,
         ctx: &GpuContext,
@@ -397,9 +427,8 @@ impl Renderer {
     ) -> Result<Frame, GpuError> {
         let t = FrameTarget::new(ctx, o.width, o.height, false)?;
         let n = t.pixel_count();
+        let cap = t.tile_capacity() as u64;
         let dev = &ctx.device;
-        let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render") });
-        self.encode(ctx, &mut enc, scene, s, bounds, o, &t)?;
         let read = |label, size| {
             dev.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -408,22 +437,34 @@ impl Renderer {
                 mapped_at_creation: false,
             })
         };
-        let pixels_read = read("pixels readback", n * 4);
-        let hits_read = read("hits readback", n * 16);
-        let stats_read = read("stats readback", n * 8);
-        enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, n * 4);
-        enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, n * 16);
-        enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, n * 8);
-        ctx.queue.submit([enc.finish()]);
-        let px: Vec<u32> = read_back(ctx, &pixels_read, n * 4, "pixels")?;
-        let h: Vec<GpuHit> = read_back(ctx, &hits_read, n * 16, "hits")?;
-        let st: Vec<GpuRayStats> = read_back(ctx, &stats_read, n * 8, "ray stats")?;
-        Ok(Frame {
+        let pixels_read = read("pixels readback", cap * 4);
+        let hits_read = read("hits readback", cap * 16);
+        let stats_read = read("stats readback", cap * 8);
+        let mut frame = Frame {
             width: o.width,
             height: o.height,
-            rgba: px.iter().flat_map(|p| p.to_le_bytes()).collect(),
-            hits: h.iter().map(|h| Hit { t: h.t, triangle: h.triangle, u: h.u, v: h.v }).collect(),
-            stats: st,
-        })
+            rgba: Vec::with_capacity(n as usize * 4),
+            hits: Vec::with_capacity(n as usize),
+            stats: Vec::with_capacity(n as usize),
+        };
+        let mut first = 0u64;
+        while first < n {
+            let count = cap.min(n - first);
+            let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render tile") });
+            self.encode_tile(ctx, &mut enc, scene, s, bounds, o, &t, first as u32, count as u32)?;
+            enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, count * 4);
+            enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, count * 16);
+            enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, count * 8);
+            ctx.queue.submit([enc.finish()]);
+            let px: Vec<u32> = read_back(ctx, &pixels_read, count * 4, "pixels")?;
+            let h: Vec<GpuHit> = read_back(ctx, &hits_read, count * 16, "hits")?;
+            let st: Vec<GpuRayStats> = read_back(ctx, &stats_read, count * 8, "ray stats")?;
+            ctx.check_device()?;
+            frame.rgba.extend(px.iter().flat_map(|p| p.to_le_bytes()));
+            frame.hits.extend(h.iter().map(|h| Hit { t: h.t, triangle: h.triangle, u: h.u, v: h.v }));
+            frame.stats.extend(st);
+            first += count;
+        }
+        Ok(frame)
     }
 }

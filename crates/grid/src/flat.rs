@@ -223,7 +223,7 @@ mod parallel {
         // prefix sum (each cell's end), then the scatter decrements each cell's end once per
         // reference, filling the cell backwards, so each entry ends at its cell's start. No
         // cursor array, no second M-sized allocation.
-        let mut offsets = vec![0u32; cells + 1];
+        let mut offsets = crate::zeroed::<u32>(cells + 1, "the cell table")?;
         times.record("count", || {
             split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells)).into_par_iter().enumerate().for_each(
                 |(s, part)| {
@@ -237,8 +237,8 @@ mod parallel {
         });
         let total = times.record("scan", || par_inclusive_scan(&mut offsets[..cells]))?;
         offsets[cells] = total as u32;
-        let refs = times.record("scatter", || {
-            let mut refs = vec![0u32; total as usize];
+        let mut refs = crate::zeroed::<u32>(total as usize, "triangle references")?;
+        times.record("scatter", || {
             // A slab's references start where the cell before it ends.
             let slab_start = |s: usize| {
                 let base = edge[s] as usize * layer;
@@ -261,7 +261,6 @@ mod parallel {
                     });
                 }
             });
-            refs
         });
         let cell_start = offsets;
         Ok(FlatGrid { geom, cell_start, refs })

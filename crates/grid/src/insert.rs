@@ -158,7 +158,7 @@ pub fn bucket(
         }
     };
     let start = web_time::Instant::now();
-    let mut counts = vec![0u32; cells];
+    let mut counts = crate::zeroed::<u32>(cells, "cell counts")?;
     let mut upper = 0u64;
     for k in 0..n {
         let g = prepare(geom, &tris[id(k) as usize], margin);
@@ -178,7 +178,7 @@ pub fn bucket(
     let start = web_time::Instant::now();
     let mut cursor = counts;
     cursor.copy_from_slice(&cell_start[..cells]);
-    let mut refs = vec![0u32; cell_start[cells] as usize];
+    let mut refs = crate::zeroed::<u32>(cell_start[cells] as usize, "triangle references")?;
     for k in 0..n {
         let i = id(k);
         let g = prepare(geom, &tris[i as usize], margin);

@@ -45,8 +45,33 @@ pub enum BuildError {
         "the grid would hold at least {refs} triangle references, more than the limit of {limit}; lower the resolution or use exact insertion (--exact)"
     )]
     TooManyReferences { refs: u64, limit: u64 },
+    #[error(
+        "the grid would have {cells} cells, more than the limit of {limit}; lower the resolution or raise the cell limit (--max-cells)"
+    )]
+    TooManyCells { cells: u64, limit: u64 },
+    #[error("cannot allocate {what} ({bytes} bytes): out of memory")]
+    OutOfMemory { what: &'static str, bytes: u64 },
     #[error("{0}")]
     InvalidParameter(String),
+}
+
+/// A vector of `n` default values, or [`BuildError::OutOfMemory`] when the allocator refuses
+/// (an address-space limit) instead of aborting the process.
+pub(crate) fn zeroed<T: Copy + Default>(n: usize, what: &'static str) -> Result<Vec<T>, BuildError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
+    v.resize(n, T::default());
+    Ok(v)
+}
+
+/// Refuses a grid of resolution `res` with more than `limit` cells, before anything is allocated.
+pub fn check_cells(res: [u32; 3], limit: u64) -> Result<(), BuildError> {
+    let cells = res.iter().map(|&r| r as u64).product::<u64>();
+    if cells > limit {
+        return Err(BuildError::TooManyCells { cells, limit });
+    }
+    Ok(())
 }
 
 /// Bounds of a triangle soup (all corners).

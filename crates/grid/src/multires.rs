@@ -117,6 +117,8 @@ struct Ctx<'a> {
     opts: MultiresOptions,
     insert: InsertMode,
     top_res: UVec3,
+    /// Cells over all levels so far, held under `opts.cost.max_cells`.
+    cells: std::sync::atomic::AtomicU64,
 }
 
 impl Ctx<'_> {
@@ -172,9 +174,13 @@ impl Ctx<'_> {
                 return Ok(None);
             }
         }
+        let used = self.cells.fetch_add(geom.cell_count(), std::sync::atomic::Ordering::Relaxed) + geom.cell_count();
+        if used > self.opts.cost.max_cells {
+            return Err(BuildError::TooManyCells { cells: used, limit: self.opts.cost.max_cells });
+        }
         let mut sub = Subtree::default();
         sub.nodes.push(Node { res, first_cell: 0, depth, margin: margin as f32, scale });
-        sub.cells = vec![[0, 0]; geom.cell_count() as usize];
+        sub.cells = crate::zeroed(geom.cell_count() as usize, "sub-grid cells")?;
         for z in 0..res.z {
             for y in 0..res.y {
                 for x in 0..res.x {
@@ -217,8 +223,9 @@ pub fn build(
     }
     let bounds = times.record("bounds", || triangle_bounds(tris));
     let geom = GridGeometry::new(&bounds, top_res);
+    crate::check_cells(geom.res.to_array(), opts.cost.max_cells)?;
     let top = FlatGrid::build(tris, geom, build, times)?;
-    let ctx = Ctx { tris, opts, insert: build.insert, top_res: geom.res };
+    let ctx = Ctx { tris, opts, insert: build.insert, top_res: geom.res, cells: geom.cell_count().into() };
     let cells = geom.cell_count() as usize;
     let one = |i: usize| -> Result<Option<Subtree>, BuildError> {
         let c = UVec3::new(
@@ -250,7 +257,7 @@ pub fn build(
             margin: crate::geometry::INSERT_MARGIN_CELLS as f32,
             scale: Vec3::ONE,
         });
-        root.cells = vec![[0, 0]; cells];
+        root.cells = vec![[0, 0]; cells]; // within the cell limit, checked above
         for (i, sub) in subtrees.into_iter().enumerate() {
             match sub {
                 Some(s) => {

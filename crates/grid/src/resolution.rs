@@ -38,7 +38,8 @@ pub struct CostModel {
     pub samples: u32,
     /// Memory cap on the sampled interval: at most this many cells per triangle …
     pub max_cells_per_triangle: f64,
-    /// … and at most this many cells overall.
+    /// … and at most this many cells overall. Also the hard limit for every structure, whatever
+    /// chose its resolution (over all levels of a hierarchy): `--max-cells`.
     pub max_cells: u64,
 }
 

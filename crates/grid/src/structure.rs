@@ -254,10 +254,16 @@ pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildRepo
             resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.insert, cfg.build.parallel)
         })
     };
+    // Every resolution, explicit or chosen, obeys the same cell limit as the auto choice.
+    let choose = |times: &mut PhaseTimes, policy: Resolution| -> Result<ResolutionChoice, BuildError> {
+        let c = choose(times, policy);
+        crate::check_cells(c.resolution, cfg.cost.max_cells)?;
+        Ok(c)
+    };
     let mut macro_samples = Vec::new();
     let (grid, choice) = match cfg.kind {
         GridKind::Flat | GridKind::Proximity => {
-            let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto));
+            let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto))?;
             let g = FlatGrid::build(tris, GridGeometry::new(&bounds, choice.resolution), cfg.build, &mut times)?;
             let grid = if cfg.kind == GridKind::Flat {
                 AnyGrid::Flat(g)
@@ -267,25 +273,30 @@ pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildRepo
             (grid, Some(choice))
         }
         GridKind::Macrocell => {
-            let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto));
+            let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto))?;
             let (g, samples) = MacrocellGrid::build(tris, choice.resolution, cfg.macro_size, cfg.build, &mut times)?;
             macro_samples = samples;
             (AnyGrid::Macrocell(g), Some(choice))
         }
         GridKind::Multires => {
-            let choice = choose(&mut times, cfg.resolution.unwrap_or(MULTIRES_TOP_DEFAULT));
-            let h = crate::multires::build(tris, choice.resolution, cfg.multires, cfg.build, &mut times)?;
+            let choice = choose(&mut times, cfg.resolution.unwrap_or(MULTIRES_TOP_DEFAULT))?;
+            // The cell limit covers the sub-grids too.
+            let multires = MultiresOptions {
+                cost: CostModel { max_cells: cfg.cost.max_cells, ..cfg.multires.cost },
+                ..cfg.multires
+            };
+            let h = crate::multires::build(tris, choice.resolution, multires, cfg.build, &mut times)?;
             (AnyGrid::Multires(h), Some(choice))
         }
         GridKind::TwoLevel => {
             let (top, choice) = match cfg.resolution {
                 Some(p) => {
-                    let c = choose(&mut times, p);
+                    let c = choose(&mut times, p)?;
                     (Some(c.resolution), Some(c))
                 }
                 None => (None, None),
             };
-            let h = crate::twolevel::build(tris, top, cfg.twolevel, cfg.build, &mut times)?;
+            let h = crate::twolevel::build(tris, top, cfg.twolevel, cfg.build, cfg.cost.max_cells, &mut times)?;
             (AnyGrid::TwoLevel(h), choice)
         }
     };

@@ -34,23 +34,29 @@ pub fn top_resolution(tris: &[[Vec3; 3]], opts: &TwoLevelOptions) -> [u32; 3] {
     cubic_cells(&triangle_bounds(tris), opts.top_density * tris.len() as f64)
 }
 
-/// Builds a two-level grid; `top_res = None` uses [`top_resolution`].
+/// Builds a two-level grid; `top_res = None` uses [`top_resolution`]. `max_cells` bounds the
+/// cells of both levels together.
 pub fn build(
     tris: &[[Vec3; 3]],
     top_res: Option<[u32; 3]>,
     opts: TwoLevelOptions,
     build: BuildOptions,
+    max_cells: u64,
     times: &mut PhaseTimes,
 ) -> Result<Hierarchy, BuildError> {
-    if !(opts.top_density > 0.0 && opts.leaf_density > 0.0) {
-        return Err(BuildError::InvalidParameter("two-level densities must be positive".into()));
+    let ok = |d: f64| d > 0.0 && d.is_finite();
+    if !(ok(opts.top_density) && ok(opts.leaf_density)) {
+        return Err(BuildError::InvalidParameter(format!(
+            "two-level densities must be positive and finite (top {}, leaf {})",
+            opts.top_density, opts.leaf_density
+        )));
     }
     let top = top_res.unwrap_or_else(|| top_resolution(tris, &opts));
     let m = MultiresOptions {
         policy: Policy::Adaptive,
         max_depth: 1,
         density: opts.leaf_density,
-        cost: CostModel::default(),
+        cost: CostModel { max_cells, ..CostModel::default() },
         always_subdivide: true,
     };
     crate::multires::build(tris, top, m, build, times)

@@ -47,8 +47,12 @@ impl Camera {
             up: Vec3::Y,
             vfov_deg: v[6],
         };
-        if cam.eye == cam.target || !(0.01..179.0).contains(&cam.vfov_deg) {
-            return Err("eye must differ from target and fov must be in (0, 179) degrees".into());
+        // The view direction must survive normalisation in f32 (1e-30 apart underflows to NaN).
+        if (cam.target - cam.eye).normalize_or_zero() == Vec3::ZERO {
+            return Err(format!("eye and target are the same point or too close to give a view direction: \"{s}\""));
+        }
+        if !(0.01..179.0).contains(&cam.vfov_deg) {
+            return Err(format!("fov must be in (0, 179) degrees, got {}", cam.vfov_deg));
         }
         Ok(cam)
     }

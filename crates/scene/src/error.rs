@@ -110,6 +110,10 @@ pub enum RayFileError {
         #[source]
         err: std::io::Error,
     },
+    #[error("{source_name}: not a regular file")]
+    NotAFile { source_name: String },
+    #[error("{source_name}: {len} bytes, more than the limit of {limit} bytes (a quarter of memory)")]
+    TooLarge { source_name: String, len: u64, limit: u64 },
     #[error("{source_name}: size {len} bytes is not a multiple of {record} bytes (one {what} record)")]
     BadSize { source_name: String, len: u64, record: usize, what: &'static str },
 }

@@ -42,6 +42,17 @@ impl SceneKind {
         }
     }
 
+    /// The sizes [`generate`] honours for this kind (outside them it clamps): each kind's
+    /// smallest meaningful scene up to about 2^26 triangles.
+    pub fn size_range(self) -> std::ops::RangeInclusive<u32> {
+        match self {
+            SceneKind::Mountain => 1..=11,
+            SceneKind::Sphereflake => 0..=4,
+            SceneKind::Particles | SceneKind::Slivers => 1..=1 << 26,
+            SceneKind::TeapotInStadium => 1..=1000,
+        }
+    }
+
     /// What `size` means for this kind, and its default.
     pub fn size_help(self) -> (&'static str, u32) {
         match self {

@@ -102,14 +102,29 @@ pub fn hits_to_bytes(hits: &[Hit]) -> Vec<u8> {
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RayFileError + '_ {
     move |err| RayFileError::Io { source_name: path.display().to_string(), err }
 }
+/// Reads a ray file: a regular file (not a device or pipe) within the default load budget.
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>, RayFileError> {
-    rays_from_bytes(&std::fs::read(path).map_err(io_err(path))?, &path.display().to_string())
+    rays_from_bytes(&read_bounded(path)?, &path.display().to_string())
+}
+
+/// A regular file's bytes, refused above [`crate::load_budget::default_max_bytes`] (each
+/// record read is also a record written).
+fn read_bounded(path: &Path) -> Result<Vec<u8>, RayFileError> {
+    let meta = std::fs::metadata(path).map_err(io_err(path))?;
+    if !meta.is_file() {
+        return Err(RayFileError::NotAFile { source_name: path.display().to_string() });
+    }
+    let limit = crate::load_budget::default_max_bytes();
+    if meta.len() > limit {
+        return Err(RayFileError::TooLarge { source_name: path.display().to_string(), len: meta.len(), limit });
+    }
+    std::fs::read(path).map_err(io_err(path))
 }
 pub fn write_rays(path: &Path, rays: &[Ray]) -> Result<(), RayFileError> {
     std::fs::write(path, rays_to_bytes(rays)).map_err(io_err(path))
 }
 pub fn read_hits(path: &Path) -> Result<Vec<Hit>, RayFileError> {
-    hits_from_bytes(&std::fs::read(path).map_err(io_err(path))?, &path.display().to_string())
+    hits_from_bytes(&read_bounded(path)?, &path.display().to_string())
 }
 pub fn write_hits(path: &Path, hits: &[Hit]) -> Result<(), RayFileError> {
     std::fs::write(path, hits_to_bytes(hits)).map_err(io_err(path))

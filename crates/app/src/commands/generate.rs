@@ -15,6 +15,14 @@ pub fn run(args: GenArgs) -> anyhow::Result<()> {
     };
     let (meaning, default) = kind.size_help();
     let size = args.size.unwrap_or(default);
+    let range = kind.size_range();
+    anyhow::ensure!(
+        range.contains(&size),
+        "--size {size} is out of range for {}: {}..={} ({meaning})",
+        kind.name(),
+        range.start(),
+        range.end()
+    );
     let g = procedural::generate(kind, size, args.seed);
     let bytes = gridrt_scene::glb_write::to_glb(
         &g.mesh,

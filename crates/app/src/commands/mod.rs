@@ -25,7 +25,7 @@ pub fn load_scene(arg: &SceneArg) -> anyhow::Result<(Mesh, LoadReport)> {
     if arg.scene == "@default" {
         return Ok(gridrt_scene::load_default());
     }
-    Ok(gridrt_scene::gltf_load::load_path(Path::new(&arg.scene))?)
+    Ok(gridrt_scene::gltf_load::load_path_with(Path::new(&arg.scene), &crate::limits::get())?)
 }
 
 /// Builds the structure the grid flags describe.

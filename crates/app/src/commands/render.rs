@@ -13,6 +13,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let tris = mesh.triangles();
     let bounds = mesh.bounds();
     let (width, height) = args.size;
+    // The frame comes back whole (pixels, hits and stats: 28 bytes a pixel); the GPU renders it
+    // in tiles.
+    let need = width as u64 * height as u64 * 28;
+    let budget = gridrt_scene::load_budget::default_max_bytes();
+    anyhow::ensure!(
+        need <= budget,
+        "--size {width}x{height} needs {need} bytes of frame memory, more than the budget of {budget} bytes (a quarter of memory)"
+    );
     let camera = if args.camera == "auto" {
         Camera::fit(&bounds, width as f32 / height as f32)
     } else {
@@ -32,7 +40,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         mailbox: !args.no_mailbox,
         heat_max: args.heat_max,
     };
-    renderer.render(&ctx, &scene, &gs, &bounds, &opts)?; // warm-up: pipeline compilation
+    // Warm-up on a small frame: pipeline compilation stays out of the timing.
+    renderer.render(&ctx, &scene, &gs, &bounds, &RenderOptions { width: 64, height: 48, ..opts })?;
     let start = std::time::Instant::now();
     let frame = renderer.render(&ctx, &scene, &gs, &bounds, &opts)?;
     let ms = start.elapsed().as_secs_f64() * 1e3;

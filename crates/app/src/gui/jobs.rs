@@ -48,9 +48,12 @@ impl SceneSource {
 pub fn load_scene(source: &SceneSource) -> Result<LoadedScene, String> {
     let (mesh, report) = match source {
         SceneSource::Default => gridrt_scene::load_default(),
-        SceneSource::Path(p) => gridrt_scene::gltf_load::load_path(p).map_err(|e| e.to_string())?,
+        SceneSource::Path(p) => {
+            gridrt_scene::gltf_load::load_path_with(p, &crate::limits::get()).map_err(|e| e.to_string())?
+        }
         SceneSource::Bytes { name, bytes } => {
-            gridrt_scene::gltf_load::load_slice(bytes, name, None).map_err(|e| e.to_string())?
+            gridrt_scene::gltf_load::load_slice_with(bytes, name, None, &crate::limits::get())
+                .map_err(|e| e.to_string())?
         }
     };
     if mesh.triangle_count() == 0 {

@@ -155,7 +155,7 @@ impl GridrtApp {
             settings.grid.kind = k;
         }
         if let Some(v) = &args.view {
-            settings.view = v.clone();
+            settings.view = v.name().into();
         }
         if let Some(t) = args.traversal {
             settings.traversal = t;
@@ -246,7 +246,12 @@ impl GridrtApp {
         {
             self.scene_job = None;
             match r.and_then(|r| r) {
-                Ok(loaded) => self.set_scene(loaded),
+                Ok(loaded) => {
+                    if let Err(e) = self.set_scene(loaded) {
+                        self.error = Some(e.clone());
+                        self.fail_smoke(ctx, e);
+                    }
+                }
                 Err(e) => {
                     self.error = Some(e.clone());
                     self.fail_smoke(ctx, e);
@@ -292,15 +297,18 @@ impl GridrtApp {
         self.poll_measurement(ctx);
     }
 
-    fn set_scene(&mut self, loaded: LoadedScene) {
+    /// Makes `loaded` the current scene; when its GPU upload fails the previous scene stays and
+    /// the error is returned.
+    fn set_scene(&mut self, loaded: LoadedScene) -> Result<(), String> {
+        let gpu_scene = match &self.gpu {
+            Some(g) => Some(
+                GpuScene::new(&g.ctx, &loaded.tris)
+                    .and_then(|s| g.ctx.check_device().map(|()| s))
+                    .map_err(|e| format!("{}: {e} (the previous scene stays)", loaded.name))?,
+            ),
+            None => None,
+        };
         self.scene_generation += 1;
-        let gpu_scene = self.gpu.as_ref().and_then(|g| match GpuScene::new(&g.ctx, &loaded.tris) {
-            Ok(s) => Some(s),
-            Err(e) => {
-                self.error = Some(format!("{}: {e}", loaded.name));
-                None
-            }
-        });
         let aspect = self.last_key.map_or(1.0, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
         self.orbit = match self.initial_camera.take() {
             Some(cam) => Orbit::from_camera(&cam, &loaded.bounds),
@@ -309,17 +317,25 @@ impl GridrtApp {
         self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
         self.measurement = Default::default();
         self.build_error = None;
+        Ok(())
     }
 
     fn set_built(&mut self, built: Built) {
         self.worker_builds += u64::from(built.in_worker);
-        let gpu = self.gpu.as_ref().and_then(|g| match GpuStructure::new(&g.ctx, &built.grid) {
-            Ok(s) => Some(s),
-            Err(e) => {
-                self.error = Some(format!("uploading the {} grid: {e}", built.config.kind));
-                None
-            }
-        });
+        let gpu = match &self.gpu {
+            Some(g) => match GpuStructure::new(&g.ctx, &built.grid).and_then(|s| g.ctx.check_device().map(|()| s)) {
+                Ok(s) => Some(s),
+                Err(e) => {
+                    // The previous structure stays on screen; this configuration is not retried.
+                    self.build_error = Some((
+                        built.config,
+                        format!("uploading the {} grid: {e} (the previous one stays)", built.config.kind),
+                    ));
+                    return;
+                }
+            },
+            None => None,
+        };
         self.built_counter += 1;
         self.built = Some(BuiltState { built, gpu, id: self.built_counter });
     }
@@ -725,7 +741,9 @@ impl GridrtApp {
             self.viewport.start(&self.render_options(key.camera, size));
             self.last_key = Some(key);
         }
-        if let Err(e) = self.viewport.step(gpu, gs, s, &scene.loaded.bounds) {
+        if let Err(e) =
+            self.viewport.step(gpu, gs, s, &scene.loaded.bounds).and_then(|done| gpu.ctx.check_device().map(|()| done))
+        {
             self.viewport.cancel();
             self.viewport.error = Some(e.to_string());
         }

@@ -261,7 +261,7 @@ impl Viewport {
         // Tiles of ~TILE_MS, at most ~128 a frame; several per UI wake-up, up to STEP_MS of
         // work, since each wake-up repaints the UI (costly on a software adapter).
         let floor = (f.n / MAX_TILES).max(q) as f64;
-        let tile = ((self.rate * TILE_MS).clamp(floor, f.n as f64) as u32 / q * q).max(q);
+        let tile = ((self.rate * TILE_MS).clamp(floor, f.n as f64) as u32 / q * q).max(q).min(target.tile_capacity());
         let budget = (self.rate * STEP_MS).max(tile as f64).max((f.n / MAX_WAKES) as f64) as u64;
         let started = Instant::now();
         let mut count = 0u32;

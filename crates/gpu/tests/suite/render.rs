@@ -2,7 +2,7 @@
 //! rendering of the same camera (≥ 99.9% of pixels), for every grid kind; every view renders.
 
 use gridrt_gpu::cpu::{camera_rays, gpu_camera, present_totals, shade_pixel, shadow_ray};
-use gridrt_gpu::render::shade_params;
+use gridrt_gpu::render::{MAX_TILE_PIXELS, shade_params, tile_limit};
 use gridrt_gpu::trace::{read_back, tile_quantum};
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_gpu::{FrameTarget, RenderOptions, Renderer, View};
@@ -69,6 +69,53 @@ fn default_scene_renders_deterministically_and_matches_the_cpu() {
     }
 }
 
+/// A frame larger than one tile (the device's binding limit or [`MAX_TILE_PIXELS`]) renders
+/// in several tiles with the same hits as the CPU, no seam; a display target refuses a size
+/// beyond the device's textures with an error instead of a device error.
+#[test]
+fn frames_larger_than_a_tile_render_exactly() {
+    let Some(ctx) = gpu() else { return };
+    let (mesh, _) = gridrt_scene::load_default();
+    let tris = mesh.triangles();
+    let bounds = mesh.bounds();
+    let (w, h) = (1200, 1000);
+    assert!(u64::from(tile_limit(ctx)) < u64::from(w * h), "the frame must need several tiles");
+    assert!(tile_limit(ctx) <= MAX_TILE_PIXELS);
+    let camera = Camera::fit(&bounds, w as f32 / h as f32);
+    let renderer = Renderer::new(ctx).unwrap();
+    let scene = GpuScene::new(ctx, &tris).unwrap();
+    let (grid, _) = structure::build(&tris, &GridConfig::default()).unwrap();
+    let gs = GpuStructure::new(ctx, &grid).unwrap();
+    let opts = RenderOptions {
+        width: w,
+        height: h,
+        camera,
+        view: View::Depth,
+        traversal: Traversal::AmanatidesWoo,
+        mailbox: true,
+        heat_max: 64.0,
+    };
+    let frame = renderer.render(ctx, &scene, &gs, &bounds, &opts).unwrap();
+    assert_eq!((frame.hits.len(), frame.rgba.len()), ((w * h) as usize, (w * h * 4) as usize));
+    let rays = camera_rays(&gpu_camera(&camera, w, h));
+    let (cpu_hits, _) =
+        grid.trace_batch(&tris, &rays, TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true }, true);
+    let same = frame.hits.iter().zip(&cpu_hits).filter(|(g, c)| g.triangle == c.triangle).count();
+    println!("{w}x{h} in tiles of {}: {same} of {} pixels agree with the CPU", tile_limit(ctx), w * h);
+    assert!(same as f64 >= 0.999 * cpu_hits.len() as f64, "{same} of {} pixels agree", cpu_hits.len());
+    // Rows on both sides of every tile boundary agree too (no seam).
+    let tile = tile_limit(ctx) as usize;
+    for edge in (tile..(w * h) as usize).step_by(tile) {
+        for i in edge - 64..edge + 64 {
+            assert_eq!(frame.hits[i].triangle, cpu_hits[i].triangle, "pixel {i} at the tile edge {edge}");
+        }
+    }
+    ctx.check_device().unwrap();
+    let max = ctx.device.limits().max_texture_dimension_2d;
+    assert!(FrameTarget::new(ctx, max + 1, 16, true).is_err(), "a display texture over {max} pixels is refused");
+    ctx.check_device().unwrap();
+}
+
 /// A tiny PPM writer so the test can leave images to look at without an image dependency.
 fn write_ppm(path: &std::path::Path, w: u32, h: u32, rgba: &[u8]) {
     let mut data = format!("P6\n{w} {h}\n255\n").into_bytes();
@@ -114,7 +161,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
         };
         let reference = renderer.render(ctx, &scene, &gs, &bounds, &opts).unwrap();
         // Twice into the same target as one tile (buffers are reused, totals are cleared per
-        // frame), then in tiles of an odd number of quanta, one submission each.
+        // frame), then in tiles of an odd size (starts off any alignment), one submission each.
         let q = tile_quantum(ctx);
         for round in 0..3 {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -124,7 +171,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
                 let n = w * h;
                 let mut first = 0;
                 while first < n {
-                    let count = (3 * q).min(n - first);
+                    let count = (3 * q + 5).min(n - first);
                     renderer.encode_tile(ctx, &mut enc, &scene, &gs, &bounds, &opts, &target, first, count).unwrap();
                     first += count;
                     if first < n {
@@ -132,10 +179,10 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
                         enc = ctx.device.create_command_encoder(&Default::default());
                     }
                 }
-                // A tile that does not start on a quantum is refused, not mis-rendered.
+                // A tile past the frame or over the target's capacity is refused, not mis-rendered.
                 let mut e2 = ctx.device.create_command_encoder(&Default::default());
-                assert!(renderer.encode_tile(ctx, &mut e2, &scene, &gs, &bounds, &opts, &target, 1, 64).is_err());
                 assert!(renderer.encode_tile(ctx, &mut e2, &scene, &gs, &bounds, &opts, &target, 0, n + 1).is_err());
+                assert!(renderer.encode_tile(ctx, &mut e2, &scene, &gs, &bounds, &opts, &target, n - 1, 2).is_err());
             }
             let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("texture readback"),

@@ -199,6 +199,11 @@ fn gpu_matches_cpu_on_shared_scenes() {
     }
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
     let Ok(rd) = std::fs::read_dir(&dir) else {
+        assert!(
+            !std::env::var("GRIDRT_REQUIRE_SHARED_SCENES").is_ok_and(|x| x == "1"),
+            "GRIDRT_REQUIRE_SHARED_SCENES=1 but {} is missing",
+            dir.display()
+        );
         println!("../shared/scenes not present: nothing to do");
         return;
     };

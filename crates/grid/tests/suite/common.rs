@@ -9,7 +9,8 @@ use gridrt_scene::rays::{camera_rays, inside_rays, random_rays};
 use gridrt_scene::rng::Rng;
 use gridrt_scene::{Camera, Hit, Mesh, Ray};
 
-/// `../shared/scenes` next to the repository, when present.
+/// `../shared/scenes` next to the repository, when present; with
+/// `GRIDRT_REQUIRE_SHARED_SCENES=1` (CI) their absence fails the test.
 pub fn shared_scenes() -> Vec<PathBuf> {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
     let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
@@ -18,6 +19,11 @@ pub fn shared_scenes() -> Vec<PathBuf> {
         })
         .unwrap_or_default();
     v.sort();
+    assert!(
+        !(v.is_empty() && std::env::var("GRIDRT_REQUIRE_SHARED_SCENES").is_ok_and(|x| x == "1")),
+        "GRIDRT_REQUIRE_SHARED_SCENES=1 but {} holds no .glb",
+        dir.display()
+    );
     v
 }
 
