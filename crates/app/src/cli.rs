@@ -57,6 +57,13 @@ pub struct AppArgs {
     /// Camera to start with: eye_x,eye_y,eye_z,target_x,target_y,target_z,fov (default: frame the scene).
     #[arg(long, value_parser = parse_camera)]
     pub camera: Option<gridrt_scene::Camera>,
+    /// Window size WIDTHxHEIGHT in logical pixels.
+    #[arg(long, default_value = "1280x800", value_parser = parse_size)]
+    pub window_size: (u32, u32),
+    /// Render frames of exactly WIDTHxHEIGHT pixels, shown scaled to the view (default: the
+    /// view's size times the render scale).
+    #[arg(long, value_parser = parse_size)]
+    pub frame_size: Option<(u32, u32)>,
     /// Rendered pixels per screen pixel, 0.05..=1 (default: saved setting; 1 in smoke mode).
     #[arg(long, value_parser = parse_render_scale)]
     pub render_scale: Option<f32>,

@@ -4,13 +4,13 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// The binary, without any machine calibration of the cost model (tests stay hermetic).
 /// `GRIDRT_SKIP_GPU_TESTS=1`: the GPU is skipped explicitly (never in CI); commands then run
 /// with `--no-gpu` and GPU columns are not asserted.
 fn skip_gpu() -> bool {
     std::env::var("GRIDRT_SKIP_GPU_TESTS").is_ok_and(|v| v == "1")
 }
 
+/// The binary, without any machine calibration of the cost model (tests stay hermetic).
 fn gridrt_cmd() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_gridrt"));
     c.env("GRIDRT_CALIBRATION", "/nonexistent/gridrt-calibration.json");
@@ -131,6 +131,105 @@ fn bad_inputs_fail_with_clear_messages() {
     fails(&["build", s(&scene), "--grid", "octree"], "unknown grid");
     fails(&["build", s(&scene), "--grid", "macrocell", "--macro-size", "3"], "power of two");
     fails(&["build", s(&scene), "--grid", "multires", "--policy", "fancy"], "unknown policy");
+}
+
+/// A .glb of `json` and `bin`.
+fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(json).unwrap();
+    while !j.len().is_multiple_of(4) {
+        j.push(b' ');
+    }
+    gridrt_scene::glb_write::assemble_glb(&j, Some(bin))
+}
+
+/// Runs gridrt under a 2 GiB address-space limit; returns the exit code and stderr.
+fn run_limited(args: &[&str]) -> (Option<i32>, String, std::time::Duration) {
+    let start = std::time::Instant::now();
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 2097152 && exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_gridrt"))
+        .args(args)
+        .env("GRIDRT_CALIBRATION", "/nonexistent/gridrt-calibration.json")
+        .output()
+        .expect("running gridrt under ulimit");
+    (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned(), start.elapsed())
+}
+
+/// Hostile files and oversized requests, as a new user would meet them: each ends in a
+/// one-line error with exit code 1 (a bad flag: 2) within 2 GiB of address space and 30 s.
+#[test]
+fn hostile_files_and_sizes_end_in_one_line_errors() {
+    use serde_json::json;
+    let tri: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let base = |nodes: serde_json::Value, accessor: serde_json::Value| {
+        json!({"asset": {"version": "2.0"}, "buffers": [{"byteLength": 36}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}], "accessors": [accessor],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "nodes": nodes, "scenes": [{"nodes": [0]}]})
+    };
+    let dense = json!({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"});
+    let chain = |levels: usize, fanout: usize| {
+        let mut n: Vec<serde_json::Value> = (0..levels).map(|i| json!({"children": vec![i + 1; fanout]})).collect();
+        n.push(json!({"mesh": 0}));
+        serde_json::Value::Array(n)
+    };
+    let files = [
+        ("graph-bomb.glb", glb(&base(chain(29, 2), dense.clone()), &tri), "--max-triangles"),
+        ("wide-bomb.glb", glb(&base(chain(8, 16), dense.clone()), &tri), "--max-triangles"),
+        (
+            "sparse-bomb.glb",
+            glb(
+                &base(
+                    json!([{"mesh": 0}]),
+                    json!({"componentType": 5126, "count": 805_306_368u64, "type": "VEC3",
+                        "sparse": {"count": 1, "indices": {"bufferView": 0, "componentType": 5125}, "values": {"bufferView": 0}}}),
+                ),
+                &tri,
+            ),
+            "--max-load-bytes",
+        ),
+    ];
+    let mut cases: Vec<(Vec<String>, &str, i32)> = Vec::new();
+    for (name, bytes, needle) in &files {
+        let path = tmp(name);
+        std::fs::write(&path, bytes).unwrap();
+        cases.push((vec!["info".into(), s(&path).into()], needle, 1));
+    }
+    let mut uri = base(json!([{"mesh": 0}]), dense);
+    uri["buffers"][0]["uri"] = json!("/etc/passwd");
+    let gltf = tmp("absolute-uri.gltf");
+    std::fs::write(&gltf, serde_json::to_vec(&uri).unwrap()).unwrap();
+    cases.push((vec!["info".into(), s(&gltf).into()], "absolute path", 1));
+    let words = |a: &[&str]| a.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    for (args, needle, code) in [
+        (&["build", "@default", "--resolution", "1024,1024,1024"][..], "--max-cells", 1),
+        (&["build", "@default", "--resolution", "density=1e9"], "--max-cells", 1),
+        (&["build", "@default", "--grid", "twolevel", "--top-density", "inf"], "finite", 1),
+        (&["build", "@default", "--grid", "twolevel", "--leaf-density", "1e6"], "--max-cells", 1),
+        (&["build", "@default", "--grid", "multires", "--density", "1e9"], "--max-cells", 1),
+        (&["trace", "@default", "--rays", "/dev/zero", "-o", "/dev/null"], "not a regular file", 1),
+        (&["gen", "sphereflake", "--size", "9", "-o", "/dev/null"], "out of range", 1),
+        (&["gen", "particles", "--size", "0", "-o", "/dev/null"], "out of range", 1),
+        (&["render", "@default", "--camera", "0,0,0,1e-30,0,0,45", "-o", "/dev/null"], "too close", 1),
+        (&["render", "@default", "--heat-max", "0", "-o", "/dev/null"], "positive", 2),
+        (&["bench", "--rays", "0"], "at least 1", 2),
+        (&["rays", "@default", "--kind", "random", "--count", "1000000000000", "-o", "/dev/null"], "memory", 2),
+        (&["--view", "bogus"], "unknown view", 2),
+        (&["info", "@default", "--max-load-bytes", "12Q"], "unit", 2),
+    ] {
+        cases.push((words(args), needle, code));
+    }
+    for (args, needle, code) in &cases {
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (got, err, took) = run_limited(&a);
+        let err = err.trim();
+        println!("{args:?}: {err}");
+        assert_eq!(got, Some(*code), "{args:?}: exit code, stderr: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: not one line: {err}");
+        assert!(err.contains(needle), "{args:?}: \"{needle}\" missing: {err}");
+        assert!(took.as_secs() < 30, "{args:?} took {took:?}");
+    }
 }
 
 #[test]

@@ -125,14 +125,18 @@ impl GpuContext {
         GpuContext { adapter, device, queue, info, device_errors }
     }
 
-    /// "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)".
+    /// The adapter with its driver and version, as every benchmark names it:
+    /// "llvmpipe (LLVM 15.0.6, 256 bits), Mesa 25.0.7 (LLVM 15.0.6) (Vulkan, Cpu)".
     pub fn adapter_name(&self) -> String {
         // Browsers do not name WebGPU adapters (privacy); show what they do tell.
         let name = [&self.info.name, &self.info.driver, &self.info.driver_info]
             .into_iter()
             .find(|s| !s.is_empty())
             .map_or("unnamed adapter", |s| s.as_str());
-        format!("{name} ({:?}, {:?})", self.info.backend, self.info.device_type)
+        let driver = &self.info.driver_info;
+        let driver =
+            if driver.is_empty() || name.contains(driver.as_str()) { String::new() } else { format!(", {driver}") };
+        format!("{name}{driver} ({:?}, {:?})", self.info.backend, self.info.device_type)
     }
 
     /// The device errors reported since the last call, as one [`GpuError::Device`].

@@ -117,7 +117,7 @@ struct Ctx<'a> {
     opts: MultiresOptions,
     insert: InsertMode,
     top_res: UVec3,
-    /// Cells over all levels so far, held under `opts.cost.max_cells`.
+    /// Cells over all levels so far, kept or evaluated, held under `opts.cost.max_cells`.
     cells: std::sync::atomic::AtomicU64,
 }
 
@@ -165,6 +165,12 @@ impl Ctx<'_> {
             return Ok(None);
         }
         let geom = cell_geometry(parent, c, res);
+        // Every candidate sub-grid counts, kept or not: bucketing one costs its cells, and a
+        // huge density would otherwise evaluate (and reject) 64³ cells below every occupied cell.
+        let used = self.cells.fetch_add(geom.cell_count(), std::sync::atomic::Ordering::Relaxed) + geom.cell_count();
+        if used > self.opts.cost.max_cells {
+            return Err(BuildError::TooManyCells { cells: used, limit: self.opts.cost.max_cells });
+        }
         let (cell_start, refs) = bucket(self.tris, Some(ids), &geom, self.insert, margin, None)?;
         let cost_based = !matches!(self.opts.policy, Policy::MaxDepth { .. }) && !self.opts.always_subdivide;
         if cost_based {
@@ -173,10 +179,6 @@ impl Ctx<'_> {
             if m.cost(cells, refs.len() as u64) >= n as f64 * m.t_inter {
                 return Ok(None);
             }
-        }
-        let used = self.cells.fetch_add(geom.cell_count(), std::sync::atomic::Ordering::Relaxed) + geom.cell_count();
-        if used > self.opts.cost.max_cells {
-            return Err(BuildError::TooManyCells { cells: used, limit: self.opts.cost.max_cells });
         }
         let mut sub = Subtree::default();
         sub.nodes.push(Node { res, first_cell: 0, depth, margin: margin as f32, scale });

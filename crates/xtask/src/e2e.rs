@@ -103,6 +103,37 @@ fn read_frame(page: &mut Page, timeout: Duration) -> anyhow::Result<(u32, u32, V
     Ok((w, h, rgba))
 }
 
+/// A 1 KB .glb whose node i lists node i+1 twice, `levels` deep, over a one-triangle mesh:
+/// 2^levels instances, which the load budget must refuse before allocating.
+fn graph_bomb_glb(levels: usize) -> Vec<u8> {
+    let nodes: Vec<String> = (0..levels).map(|i| format!("{{\"children\":[{0},{0}]}}", i + 1)).collect();
+    let mut json = format!(
+        "{{\"asset\":{{\"version\":\"2.0\"}},\"buffers\":[{{\"byteLength\":36}}],\
+         \"bufferViews\":[{{\"buffer\":0,\"byteLength\":36}}],\
+         \"accessors\":[{{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}}],\
+         \"meshes\":[{{\"primitives\":[{{\"attributes\":{{\"POSITION\":0}}}}]}}],\
+         \"nodes\":[{},{{\"mesh\":0}}],\"scenes\":[{{\"nodes\":[0]}}],\"scene\":0}}",
+        nodes.join(",")
+    )
+    .into_bytes();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let bin: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
 pub fn run(root: &Path, dist: &Path, out: &Path, chromium: Option<PathBuf>, timeout: Duration) -> anyhow::Result<()> {
     ensure!(dist.join("index.html").is_file(), "{} has no index.html: run `cargo xtask web` first", dist.display());
     std::fs::create_dir_all(out)?;
@@ -126,6 +157,7 @@ pub fn run(root: &Path, dist: &Path, out: &Path, chromium: Option<PathBuf>, time
         .status()?;
     ensure!(st.success(), "gridrt gen failed");
     std::fs::write(dist.join("e2e-corrupt.glb"), b"glTF\x02\x00\x00\x00\xff\xff\x00\x00not a glb at all")?;
+    std::fs::write(dist.join("e2e-bomb.glb"), graph_bomb_glb(29))?;
 
     println!("web-test: native reference renders ({WIDTH}x{HEIGHT}, camera {CAMERA})");
     let mut native = Vec::new();
@@ -290,6 +322,38 @@ fn drive(
     ensure!(page.eval("window.gridrt.panic()")?.is_null(), "the app panicked");
     println!("web-test: the corrupt file shows {err} and the previous scene stays");
     std::fs::write(out.join("screenshot-corrupt.png"), page.screenshot()?)?;
+
+    // A node-graph bomb (2^29 instances in 1 KB): refused by the load budget, the scene stays.
+    page.eval(
+        "window.gridrt.dismiss_error(); \
+         fetch('e2e-bomb.glb').then(r => r.arrayBuffer()).then(b => window.gridrt.open_bytes('e2e-bomb.glb', new Uint8Array(b)))",
+    )?;
+    let err = page.wait_for(
+        "the graph bomb's error",
+        "(() => { const s = window.gridrt.stats(); return s.error && s.error.includes('e2e-bomb.glb') ? s.error : null; })()",
+        timeout,
+    )?;
+    ensure!(err.to_string().contains("load limits"), "the bomb's error does not name the load limits: {err}");
+    let s = page.eval("window.gridrt.stats()")?;
+    ensure!(s["scene"] == "e2e-scene.glb", "after the bomb the scene is {} (the previous one should stay)", s["scene"]);
+    println!("web-test: the graph bomb shows {err}");
+
+    // Frame sizes: beyond the device's textures an error (never a panic); a frame of several
+    // tiles renders.
+    page.eval("window.gridrt.dismiss_error(); window.gridrt.set_frame_size(9000, 100); true")?;
+    let r = page.wait_for(
+        "a 9000x100 frame or its error",
+        "(() => { const s = window.gridrt.stats(); \
+           return (s.error && s.error.includes('9000')) ? s.error : (s.width === 9000 && s.idle ? 'rendered' : null); })()",
+        timeout,
+    )?;
+    ensure!(page.eval("window.gridrt.panic()")?.is_null(), "the app panicked on a 9000x100 frame");
+    println!("web-test: set_frame_size(9000, 100): {r}");
+    page.eval("window.gridrt.dismiss_error(); window.gridrt.set_frame_size(1600, 1000); true")?;
+    let s =
+        wait_idle(page, "a 1600x1000 frame (two tiles)", "s.width === 1600 && s.height === 1000 && !s.error", timeout)?;
+    println!("web-test: a 1600x1000 frame in {:.0} ms", s["frame_ms"].as_f64().unwrap_or(0.0));
+    page.eval("window.gridrt.set_frame_size(0, 0); true")?;
 
     // The page keeps drawing while a large scene builds in the worker: animation frames keep
     // coming (a build on the page's thread would stall them for the whole build).

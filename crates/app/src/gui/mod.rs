@@ -208,7 +208,7 @@ impl GridrtApp {
             #[cfg(target_arch = "wasm32")]
             dropped: None,
             hook: Default::default(),
-            frame_size: None,
+            frame_size: args.frame_size.map(|(w, h)| [w, h]),
             captures: Default::default(),
             capture: None,
             frame_current: false,
@@ -597,7 +597,10 @@ impl GridrtApp {
                 HookCommand::FrameSize(size) => self.frame_size = size,
                 HookCommand::Open { name, bytes } => self.open(ctx, SceneSource::Bytes { name, bytes }),
                 HookCommand::Capture(id) => self.captures.push_back(id),
-                HookCommand::DismissError => self.error = None,
+                HookCommand::DismissError => {
+                    self.error = None;
+                    self.viewport.error = None;
+                }
             }
         }
     }
@@ -711,7 +714,15 @@ impl GridrtApp {
         ]);
         if let Some(tex) = self.viewport.texture() {
             let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
-            ui.painter().image(tex, rect, uv, egui::Color32::WHITE);
+            // A fixed frame size keeps its aspect, letterboxed in the view.
+            let shown = match self.frame_size {
+                Some([w, h]) => {
+                    let k = (rect.width() / w as f32).min(rect.height() / h as f32);
+                    egui::Rect::from_center_size(rect.center(), Vec2::new(w as f32 * k, h as f32 * k))
+                }
+                None => rect,
+            };
+            ui.painter().image(tex, shown, uv, egui::Color32::WHITE);
         }
         if let Some(job) = &self.scene_job {
             ui.put(
@@ -965,7 +976,9 @@ pub fn run_native(args: AppArgs) -> anyhow::Result<()> {
     let status: SmokeStatus = Default::default();
     let smoke = args.screenshot.is_some();
     let options = eframe::NativeOptions {
-        viewport: egui::ViewportBuilder::default().with_inner_size([1280.0, 800.0]).with_title("gridrt"),
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([args.window_size.0 as f32, args.window_size.1 as f32])
+            .with_title("gridrt"),
         wgpu_options: wgpu_options(),
         persist_window: !smoke,
         ..Default::default()
