@@ -378,6 +378,13 @@ fn gpu_trace_and_render() {
     ok(&["render", s(&scene), "--size", "64x48", "--camera", "0,0.5,6,0,0,0,40", "-o", s(&png)]);
     fails(&["render", s(&scene), "--view", "xray", "-o", s(&png)], "unknown view");
     fails(&["render", s(&scene), "--size", "0x10", "-o", s(&png)], "width and height");
+    // Larger than one dispatch and one storage binding: rendered in tiles.
+    let big = tmp("render-2304.png");
+    ok(&["render", "@default", "--size", "2304x2304", "-o", s(&big)]);
+    let img = image::open(&big).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (2304, 2304));
+    let centre = centre_pixels(&img);
+    assert!(centre.iter().any(|p| p.iter().map(|&c| c as u32).sum::<u32>() > 200), "the 2304² render is blank");
     let bench = ok(&["bench-trace", s(&scene), "--rays", "2000", "--repeat", "1"]);
     assert!(bench.contains("GPU Mrays/s") && bench.contains("primary") && bench.contains("random"), "{bench}");
 }
@@ -483,6 +490,17 @@ fn app_screenshots_under_xvfb() {
     let differ = flat.iter().zip(&macrocell).filter(|(a, b)| a != b).count();
     println!("heatmap-cells: {differ} of {} centre pixels differ between flat and macrocell", flat.len());
     assert!(differ * 20 > flat.len(), "flat and macrocell heatmaps should differ: {differ} of {}", flat.len());
+
+    // A 3840×2160 frame (more pixels than one storage binding holds): rendered in tiles.
+    let png = out_dir.join("app-3840x2160.png");
+    let out = gridrt_cmd()
+        .args(["--screenshot", s(&png), "--frames", "1", "--frame-size", "3840x2160"])
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("running the app");
+    let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success() && log.contains("last frame 3840x2160"), "a 3840x2160 frame:\n{log}");
 
     // The cost-model window's measurement: a flat grid timed at every sampled resolution.
     let png = out_dir.join("app-cost-model.png");

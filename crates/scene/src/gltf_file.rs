@@ -7,6 +7,24 @@ use std::path::{Path, PathBuf};
 use crate::error::SceneError;
 use crate::load_budget::LoadLimits;
 
+/// Required extensions that leave geometry as plain accessors (materials, textures, lights).
+const GEOMETRY_NEUTRAL_EXTENSIONS: &[&str] = &[
+    "KHR_materials_pbrSpecularGlossiness",
+    "KHR_materials_unlit",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
+    "KHR_materials_variants",
+    "KHR_texture_transform",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+    "KHR_lights_punctual",
+];
+
 /// Largest scene file read (also bounds external buffers).
 pub const MAX_FILE_BYTES: u64 = 2 << 30;
 
@@ -125,6 +143,16 @@ pub(crate) fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneErro
             }
         }
     }
+    // Extensions a file requires change how its geometry is stored (compression, quantization);
+    // gridrt reads plain accessors only, so say which one it is instead of failing obscurely.
+    if let Some(ext) = root.extensions_required.iter().find(|e| !GEOMETRY_NEUTRAL_EXTENSIONS.contains(&e.as_str())) {
+        return Err(SceneError::Unsupported {
+            source_name: name.into(),
+            detail: format!(
+                "the file requires the extension {ext}, which gridrt does not decode (plain accessors only)"
+            ),
+        });
+    }
     // Nor does it check animation channels' targets (`Animation::validate` skips them), whose
     // accessors unwrap.
     for (ai, anim) in root.animations.iter().enumerate() {
@@ -152,7 +180,9 @@ pub(crate) fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneErro
     root.validate(root, gltf::json::Path::new, &mut |path, err| {
         let p = path().to_string();
         let min_max = p.ends_with(".min") || p.ends_with(".max");
-        if !(min_max && matches!(err, Error::Missing)) {
+        // Required extensions were judged above (geometry-neutral ones are fine).
+        let required = p.starts_with("extensionsRequired");
+        if !(min_max && matches!(err, Error::Missing)) && !required {
             errors.push((p, err));
         }
     });

@@ -294,6 +294,16 @@ fn corpus() -> Vec<Case> {
     ));
     c.push(err("skin joint index out of range", rich_with(|j| j["skins"][0]["joints"] = json!([0])), skin));
     c.push(err("too few inverse bind matrices", rich_with(|j| j["skins"][0]["joints"] = json!([0, 2, 3])), skin));
+    c.push(err(
+        "requires Draco compression",
+        rich_with(|j| j["extensionsRequired"] = json!(["KHR_draco_mesh_compression"])),
+        |e| matches!(e, SceneError::Unsupported { .. }),
+    ));
+    c.push(Case {
+        name: "requires a material extension only",
+        bytes: rich_with(|j| j["extensionsRequired"] = json!(["KHR_materials_unlit"])),
+        expect: Expect::Triangles(3),
+    });
     c.push(err("morph weights count mismatch", rich_with(|j| j["meshes"][0]["weights"] = json!([0.5, 0.5])), |e| {
         matches!(e, SceneError::InvalidMorphTargets { .. })
     }));

@@ -106,32 +106,21 @@ fn read_frame(page: &mut Page, timeout: Duration) -> anyhow::Result<(u32, u32, V
 /// A 1 KB .glb whose node i lists node i+1 twice, `levels` deep, over a one-triangle mesh:
 /// 2^levels instances, which the load budget must refuse before allocating.
 fn graph_bomb_glb(levels: usize) -> Vec<u8> {
-    let nodes: Vec<String> = (0..levels).map(|i| format!("{{\"children\":[{0},{0}]}}", i + 1)).collect();
-    let mut json = format!(
-        "{{\"asset\":{{\"version\":\"2.0\"}},\"buffers\":[{{\"byteLength\":36}}],\
-         \"bufferViews\":[{{\"buffer\":0,\"byteLength\":36}}],\
-         \"accessors\":[{{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}}],\
-         \"meshes\":[{{\"primitives\":[{{\"attributes\":{{\"POSITION\":0}}}}]}}],\
-         \"nodes\":[{},{{\"mesh\":0}}],\"scenes\":[{{\"nodes\":[0]}}],\"scene\":0}}",
-        nodes.join(",")
-    )
-    .into_bytes();
+    let mut nodes: Vec<Value> = (0..levels).map(|i| json!({"children": [i + 1, i + 1]})).collect();
+    nodes.push(json!({"mesh": 0}));
+    let doc = json!({
+        "asset": {"version": "2.0"}, "buffers": [{"byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": nodes, "scenes": [{"nodes": [0]}], "scene": 0
+    });
+    let mut json = serde_json::to_vec(&doc).expect("JSON");
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let bin: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.].iter().flat_map(|x| x.to_le_bytes()).collect();
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
+    gridrt_scene::glb_write::assemble_glb(&json, Some(&bin))
 }
 
 pub fn run(root: &Path, dist: &Path, out: &Path, chromium: Option<PathBuf>, timeout: Duration) -> anyhow::Result<()> {
