@@ -182,7 +182,8 @@ pub(crate) fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneErro
         let min_max = p.ends_with(".min") || p.ends_with(".max");
         // Required extensions were judged above (geometry-neutral ones are fine).
         let required = p.starts_with("extensionsRequired");
-        if !(min_max && matches!(err, Error::Missing)) && !required {
+        let tolerated = required || (min_max && matches!(err, Error::Missing));
+        if !tolerated {
             errors.push((p, err));
         }
     });
