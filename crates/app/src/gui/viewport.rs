@@ -300,30 +300,42 @@ impl Viewport {
         Ok(completed)
     }
 
-    /// Reads the last finished frame back (RGBA8): `None` while a frame is in flight or before
-    /// the first one. The result arrives asynchronously in the returned slot.
+    /// Reads the last finished frame back (RGBA8) from the display texture, which holds every
+    /// tile (the per-pixel buffers hold only the last one): `None` while a frame is in flight or
+    /// before the first one. The result arrives asynchronously in the returned slot.
     pub fn capture(&self, gpu: &Gpu) -> Option<Captured> {
         let t = self.target.as_ref()?;
+        let texture = t.texture.as_ref()?;
         if self.frames_done == 0 || self.busy() {
             return None;
         }
-        let (w, h, size) = (t.width, t.height, t.pixel_count() * 4);
+        let (w, h) = (t.width, t.height);
+        // Texture rows are copied at a 256-byte pitch; the padding is dropped after mapping.
+        let row = w as usize * 4;
+        let pitch = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
         let dev = &gpu.ctx.device;
         let buf = dev.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame capture readback"),
-            size,
+            size: (pitch * h as usize) as u64,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame capture") });
-        enc.copy_buffer_to_buffer(&t.pixels, 0, &buf, 0, size);
+        enc.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buf,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(pitch as u32), rows_per_image: None },
+            },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
         gpu.ctx.queue.submit([enc.finish()]);
         let slot: Captured = Arc::new(Mutex::new(None));
         let (out, b, ui) = (slot.clone(), buf.clone(), gpu.ui.clone());
         buf.slice(..).map_async(wgpu::MapMode::Read, move |r| {
             let result = r.map_err(|e| e.to_string()).and_then(|()| {
                 let view = b.slice(..).get_mapped_range().map_err(|e| e.to_string())?;
-                let rgba = view.to_vec();
+                let rgba: Vec<u8> = view.chunks_exact(pitch).flat_map(|r| &r[..row]).copied().collect();
                 drop(view);
                 b.unmap();
                 Ok((w, h, rgba))
