@@ -85,7 +85,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     if ctx.info.device_type == wgpu::DeviceType::Cpu {
         // The question users ask first when the "GPU" loses: say what it is.
         println!(
-            "note: the GPU is a software adapter running on the same CPU cores; it reads storage buffers lane by lane (README, \"Structures and CPU vs GPU\")"
+            "note: the GPU is a software adapter running on the same CPU cores (README, \"Structures and CPU vs GPU\")"
         );
     }
     Ok(())
