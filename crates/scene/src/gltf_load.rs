@@ -148,7 +148,9 @@ impl Loader<'_> {
         let mut path = Vec::new();
         let nodes: Vec<gltf::Node> = self.doc.nodes().collect();
         for &root in roots {
-            self.visit(&nodes[root], DMat4::IDENTITY, &meshes, &mut out, &mut path)?;
+            if plan.mesh_below[root] {
+                self.visit(&nodes[root], DMat4::IDENTITY, &meshes, &plan.mesh_below, &mut out, &mut path)?;
+            }
         }
         if out.indices.is_empty() {
             let detail = if report.skipped_primitives.is_empty() {
@@ -172,6 +174,7 @@ impl Loader<'_> {
         node: &gltf::Node,
         parent: DMat4,
         meshes: &[Vec<Option<LocalPrimitive>>],
+        mesh_below: &[bool],
         out: &mut Mesh,
         path: &mut Vec<usize>,
     ) -> Result<(), SceneError> {
@@ -231,8 +234,8 @@ impl Loader<'_> {
             }
         }
         path.push(idx);
-        for child in node.children() {
-            self.visit(&child, world, meshes, out, path)?;
+        for child in node.children().filter(|c| mesh_below[c.index()]) {
+            self.visit(&child, world, meshes, mesh_below, out, path)?;
         }
         path.pop();
         Ok(())

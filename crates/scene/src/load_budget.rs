@@ -56,11 +56,13 @@ fn read_proc_number(path: &str, key: &str) -> Option<u64> {
 }
 
 /// What the document will allocate, as counted before loading.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Plan {
     pub triangles: u64,
     pub vertices: u64,
     pub bytes: u64,
+    /// Per node: a mesh at it or below it (subtrees without one need no visit).
+    pub mesh_below: Vec<bool>,
 }
 
 /// The flag that raises each limit, named in the errors.
@@ -242,7 +244,12 @@ pub(crate) fn check(
             flag: BYTES_FLAG,
         });
     }
-    Ok(Plan { triangles: triangles as u64, vertices: vertices as u64, bytes: c.bytes as u64 })
+    // Children come after their parents in `order`: walk it backwards.
+    let mut mesh_below: Vec<bool> = node_mesh.iter().map(|&m| m != usize::MAX).collect();
+    for &n in order.iter().rev() {
+        mesh_below[n] = mesh_below[n] || children[n].iter().any(|&c| mesh_below[c]);
+    }
+    Ok(Plan { triangles: triangles as u64, vertices: vertices as u64, bytes: c.bytes as u64, mesh_below })
 }
 
 /// Bytes per element once decoded ([`crate::accessor::read_components`] yields f64 components).

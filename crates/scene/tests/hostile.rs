@@ -151,6 +151,19 @@ fn corpus() -> Vec<Case> {
         err("graph bomb, wide (16 children per level)", graph_bomb(9, 16, true), over_budget),
         err("graph bomb of empty nodes (2^40 visits)", graph_bomb(40, 2, false), over_budget),
         err("graph bomb past 2^128 (saturating counts)", graph_bomb(200, 2, true), over_budget),
+        Case {
+            name: "2^26 - 1 empty node visits beside a mesh (under the limit: skipped, not walked)",
+            bytes: {
+                let mut d = Doc::single_triangle();
+                let mut nodes: Vec<Value> = (0..25).map(|i| json!({"children": [i + 1, i + 1]})).collect();
+                nodes.push(json!({}));
+                nodes.push(json!({"mesh": 0}));
+                d.json["nodes"] = Value::Array(nodes);
+                d.json["scenes"] = json!([{"nodes": [0, 26]}]);
+                finish(d)
+            },
+            expect: Expect::Triangles(1),
+        },
         err("chain deeper than the node-depth limit", graph_bomb(30_000, 1, true), |e| {
             matches!(e, SceneError::InvalidNode { .. })
         }),
