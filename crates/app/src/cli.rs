@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use gridrt_grid::multires::{MultiresOptions, Policy};
 use gridrt_grid::twolevel::TwoLevelOptions;
-use gridrt_grid::{BuildOptions, CostModel, GridConfig, GridKind, InsertMode, Resolution, Traversal};
+use gridrt_grid::{CostModel, GridKind, Resolution, Traversal};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -189,69 +189,6 @@ fn parse_policy(s: &str) -> Result<Policy, String> {
 
 fn parse_resolution(s: &str) -> Result<Resolution, String> {
     s.parse()
-}
-
-// The subcommands are native-only; the browser build keeps the definitions for the app's flags.
-#[cfg_attr(target_arch = "wasm32", allow(dead_code))]
-impl GridArgs {
-    pub fn cost_model(&self) -> anyhow::Result<CostModel> {
-        let d = CostModel::default();
-        // Only the native build reads a saved calibration into `m`.
-        #[cfg_attr(target_arch = "wasm32", allow(unused_mut))]
-        let mut m = CostModel {
-            t_setup: self.t_setup.unwrap_or(d.t_setup),
-            t_step: self.t_step.unwrap_or(d.t_step),
-            t_inter: self.t_inter.unwrap_or(d.t_inter),
-            samples: self.samples,
-            max_cells: self.max_cells,
-            ..d
-        };
-        #[cfg(not(target_arch = "wasm32"))]
-        if self.t_setup.is_none()
-            && self.t_step.is_none()
-            && self.t_inter.is_none()
-            && let Some((path, c)) = crate::commands::experiment::cost_constants::load_calibration()
-        {
-            eprintln!(
-                "cost model: calibrated constants from {} (Tsetup {:.2}, Tstep {:.3}, Tinter {:.3} ns)",
-                path.display(),
-                c.cpu.t_setup,
-                c.cpu.t_step,
-                c.cpu.t_inter
-            );
-            (m.t_setup, m.t_step, m.t_inter) = (c.cpu.t_setup, c.cpu.t_step, c.cpu.t_inter);
-        }
-        anyhow::ensure!(
-            m.t_setup >= 0.0 && m.t_step > 0.0 && m.t_inter > 0.0 && m.t_step.is_finite() && m.t_inter.is_finite(),
-            "cost constants must be finite, Tstep and Tinter positive"
-        );
-        anyhow::ensure!((2..=256).contains(&m.samples), "--samples must be in 2..=256");
-        Ok(m)
-    }
-
-    /// The full structure configuration these flags describe.
-    pub fn config(&self) -> anyhow::Result<GridConfig> {
-        let cost = self.cost_model()?;
-        anyhow::ensure!(self.max_depth <= 7, "--max-depth must be at most 7");
-        Ok(GridConfig {
-            kind: self.grid,
-            resolution: self.resolution,
-            build: BuildOptions {
-                insert: if self.exact { InsertMode::Exact } else { InsertMode::BoundingBox },
-                parallel: !self.serial,
-            },
-            cost,
-            macro_size: self.macro_size,
-            multires: MultiresOptions {
-                policy: self.policy,
-                max_depth: self.max_depth,
-                density: self.density,
-                cost,
-                always_subdivide: false,
-            },
-            twolevel: TwoLevelOptions { top_density: self.top_density, leaf_density: self.leaf_density },
-        })
-    }
 }
 
 #[derive(Debug, Args)]
@@ -558,16 +495,5 @@ fn parse_render_scale(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(v) if (0.05..=1.0).contains(&v) => Ok(v),
         _ => Err(format!("the render scale must be in 0.05..=1, got \"{s}\"")),
-    }
-}
-
-impl Cli {
-    /// The scene load limits these flags describe.
-    pub fn load_limits(&self) -> gridrt_scene::LoadLimits {
-        let d = gridrt_scene::LoadLimits::default();
-        gridrt_scene::LoadLimits {
-            max_triangles: self.max_triangles.unwrap_or(d.max_triangles),
-            max_bytes: self.max_load_bytes.unwrap_or(d.max_bytes),
-        }
     }
 }

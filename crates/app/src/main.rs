@@ -5,8 +5,11 @@
 mod cli;
 #[cfg(not(target_arch = "wasm32"))]
 mod commands;
+mod config;
 mod format;
 mod gui;
+#[cfg(not(target_arch = "wasm32"))]
+mod lab;
 mod limits;
 
 /// Runs the command line; any error is printed on one line (its causes joined by ": ") and the

@@ -4,8 +4,9 @@
 use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
 
+use crate::ray::PreparedRay;
 use crate::stats::RayStats;
-use crate::triangle::{PreparedRay, closer, intersect};
+use crate::triangle::{closer, intersect};
 
 /// Closest hit of `ray` among `tris` (t, then index), with stats (every triangle is a test).
 pub fn trace(tris: &[[Vec3; 3]], ray: &Ray) -> (Hit, RayStats) {

@@ -13,7 +13,7 @@ use glam::{UVec3, Vec3};
 use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
-use crate::triangle::PreparedRay;
+use crate::ray::PreparedRay;
 
 /// Largest resolution along one axis. Liu's fixed-point walker keeps coordinates in i32 with
 /// 20 fractional bits: 1024 · 2^20 = 2^30 leaves headroom.

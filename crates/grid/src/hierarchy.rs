@@ -35,11 +35,9 @@ use gridrt_scene::{Hit, Ray};
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{GridGeometry, GridRay, INSERT_MARGIN_CELLS};
-use crate::mailbox::Mailbox;
 use crate::stats::RayStats;
-use crate::trace::test_refs;
+use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, Walker};
-use crate::triangle::PreparedRay;
 
 /// `cells[i][1] == CHILD` marks an internal cell.
 pub const CHILD: u32 = u32::MAX;
@@ -130,56 +128,41 @@ impl Hierarchy {
 
     /// Closest hit (see the module doc).
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
-        let mut best = Hit::MISS;
-        let mut stats = RayStats::default();
-        let Some(pr) = PreparedRay::new(ray) else { return (best, stats) };
-        let Some(top) = self.geom.clip(&pr) else { return (best, stats) };
-        let mut mb = Mailbox::default();
         struct Frame {
             node: u32,
             ray: GridRay,
             walker: Walker,
             t_enter: f32,
         }
-        let mut stack: Vec<Frame> = Vec::with_capacity(MAX_DEPTH);
-        stack.push(Frame {
-            node: 0,
-            ray: top,
-            walker: Walker::new(traversal, &top, self.nodes[0].res),
-            t_enter: top.t0,
-        });
-        while let Some(f) = stack.last_mut() {
-            let Some(step) = f.walker.next() else {
-                stack.pop();
-                continue;
-            };
-            stats.cells += 1;
-            let node = &self.nodes[f.node as usize];
-            let idx = node.first_cell as usize
-                + (step.cell.x + node.res.x * (step.cell.y + node.res.y * step.cell.z)) as usize;
-            let [a, b] = self.cells[idx];
-            let t_enter = f.t_enter;
-            f.t_enter = step.t_exit;
-            if b == CHILD {
-                let child = &self.nodes[a as usize];
-                let r = f.ray.child(step.cell, child.res, t_enter, step.t_exit);
-                let walker = Walker::new(traversal, &r, child.res);
-                stack.push(Frame { node: a, ray: r, walker, t_enter: r.t0 });
-                continue;
+        closest_hit(tris, ray, mailbox, |search| {
+            let Some(top) = self.geom.clip(&search.ray) else { return };
+            let mut stack: Vec<Frame> = Vec::with_capacity(MAX_DEPTH);
+            let walker = Walker::new(traversal, &top, self.nodes[0].res);
+            stack.push(Frame { node: 0, ray: top, walker, t_enter: top.t0 });
+            while let Some(f) = stack.last_mut() {
+                let Some(step) = f.walker.next() else {
+                    stack.pop();
+                    continue;
+                };
+                search.visit_cell();
+                let node = &self.nodes[f.node as usize];
+                let idx = node.first_cell as usize
+                    + (step.cell.x + node.res.x * (step.cell.y + node.res.y * step.cell.z)) as usize;
+                let [a, b] = self.cells[idx];
+                let t_enter = f.t_enter;
+                f.t_enter = step.t_exit;
+                if b == CHILD {
+                    let child = &self.nodes[a as usize];
+                    let r = f.ray.child(step.cell, child.res, t_enter, step.t_exit);
+                    let walker = Walker::new(traversal, &r, child.res);
+                    stack.push(Frame { node: a, ray: r, walker, t_enter: r.t0 });
+                    continue;
+                }
+                if search.test_cell(&self.refs[a as usize..(a + b) as usize], step.t_exit) {
+                    return;
+                }
             }
-            test_refs(
-                &self.refs[a as usize..(a + b) as usize],
-                tris,
-                &pr,
-                &mut best,
-                &mut stats,
-                mailbox.then_some(&mut mb),
-            );
-            if best.t < step.t_exit {
-                break;
-            }
-        }
-        (best, stats)
+        })
     }
 }
 

@@ -23,6 +23,11 @@ pub enum InsertMode {
     Exact,
 }
 
+impl InsertMode {
+    /// Every insertion mode.
+    pub const ALL: [InsertMode; 2] = [InsertMode::BoundingBox, InsertMode::Exact];
+}
+
 /// A triangle in grid space (cells are unit cubes), f64.
 #[derive(Clone, Copy, Debug)]
 pub struct GridTriangle {
@@ -135,58 +140,4 @@ pub fn tri_box_overlap(tri: &[DVec3; 3], c: DVec3, h: f64) -> bool {
     let d = n.dot(v0);
     let r = h * (n.x.abs() + n.y.abs() + n.z.abs());
     d.abs() <= r
-}
-
-/// Buckets the triangles `ids` (or all of `tris` when `None`) into the cells of `geom`: the
-/// serial count → prefix sum → scatter of survey Algorithm 1. Returns `cell_start` (M + 1
-/// offsets) and the references, increasing within each cell. Used by the flat grid and by
-/// every node of the hierarchical grids.
-pub fn bucket(
-    tris: &[[Vec3; 3]],
-    ids: Option<&[u32]>,
-    geom: &GridGeometry,
-    mode: InsertMode,
-    margin: f64,
-    mut times: Option<&mut crate::flat::PhaseTimes>,
-) -> Result<(Vec<u32>, Vec<u32>), crate::BuildError> {
-    let cells = geom.cell_count() as usize;
-    let n = ids.map_or(tris.len(), |v| v.len());
-    let id = |k: usize| ids.map_or(k as u32, |v| v[k]);
-    let mut record = |name: &str, start: web_time::Instant| {
-        if let Some(t) = times.as_deref_mut() {
-            t.0.push((name.to_string(), start.elapsed().as_secs_f64() * 1e3));
-        }
-    };
-    let start = web_time::Instant::now();
-    let mut counts = crate::zeroed::<u32>(cells, "cell counts")?;
-    let mut upper = 0u64;
-    for k in 0..n {
-        let g = prepare(geom, &tris[id(k) as usize], margin);
-        // Refuse a grid over the reference limit before visiting its cells one by one (the
-        // box's cell count bounds the triangle's references from above).
-        let e = g.hi - g.lo + UVec3::ONE;
-        upper += e.x as u64 * e.y as u64 * e.z as u64;
-        if mode == InsertMode::BoundingBox && upper > crate::flat::MAX_REFS {
-            return Err(crate::BuildError::TooManyReferences { refs: upper, limit: crate::flat::MAX_REFS });
-        }
-        for_each_cell(geom, &g, mode, |c| counts[c] += 1);
-    }
-    record("count", start);
-    let start = web_time::Instant::now();
-    let cell_start = crate::flat::prefix_sum(counts.iter().copied(), cells)?;
-    record("scan", start);
-    let start = web_time::Instant::now();
-    let mut cursor = counts;
-    cursor.copy_from_slice(&cell_start[..cells]);
-    let mut refs = crate::zeroed::<u32>(cell_start[cells] as usize, "triangle references")?;
-    for k in 0..n {
-        let i = id(k);
-        let g = prepare(geom, &tris[i as usize], margin);
-        for_each_cell(geom, &g, mode, |c| {
-            refs[cursor[c] as usize] = i;
-            cursor[c] += 1;
-        });
-    }
-    record("scatter", start);
-    Ok((cell_start, refs))
 }

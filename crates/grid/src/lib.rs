@@ -8,6 +8,7 @@
 //! [`brute`] is the reference every structure must reproduce bit for bit.
 
 pub mod brute;
+pub mod build;
 pub mod flat;
 pub mod geometry;
 pub mod hierarchy;
@@ -16,6 +17,7 @@ pub mod macrocell;
 pub mod mailbox;
 pub mod multires;
 pub mod proximity;
+pub mod ray;
 pub mod resolution;
 pub mod stats;
 pub mod structure;
@@ -28,7 +30,8 @@ use glam::Vec3;
 use gridrt_scene::Aabb;
 use thiserror::Error;
 
-pub use flat::{BuildOptions, FlatGrid, PhaseTimes};
+pub use build::{BuildOptions, PhaseTimes, check_cells};
+pub use flat::FlatGrid;
 pub use geometry::GridGeometry;
 pub use insert::InsertMode;
 pub use resolution::{CostModel, Resolution, ResolutionChoice};
@@ -53,25 +56,6 @@ pub enum BuildError {
     OutOfMemory { what: &'static str, bytes: u64 },
     #[error("{0}")]
     InvalidParameter(String),
-}
-
-/// A vector of `n` default values, or [`BuildError::OutOfMemory`] when the allocator refuses
-/// (an address-space limit) instead of aborting the process.
-pub(crate) fn zeroed<T: Copy + Default>(n: usize, what: &'static str) -> Result<Vec<T>, BuildError> {
-    let mut v = Vec::new();
-    v.try_reserve_exact(n)
-        .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
-    v.resize(n, T::default());
-    Ok(v)
-}
-
-/// Refuses a grid of resolution `res` with more than `limit` cells, before anything is allocated.
-pub fn check_cells(res: [u32; 3], limit: u64) -> Result<(), BuildError> {
-    let cells = res.iter().map(|&r| r as u64).product::<u64>();
-    if cells > limit {
-        return Err(BuildError::TooManyCells { cells, limit });
-    }
-    Ok(())
 }
 
 /// Bounds of a triangle soup (all corners).

@@ -21,13 +21,12 @@ use glam::{UVec3, Vec3};
 use gridrt_scene::{Hit, Ray};
 use serde::{Deserialize, Serialize};
 
-use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
+use crate::build::{BuildOptions, PhaseTimes};
+use crate::flat::FlatGrid;
 use crate::geometry::{GridGeometry, GridRay};
-use crate::mailbox::Mailbox;
 use crate::stats::RayStats;
-use crate::trace::test_refs;
+use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, Walker};
-use crate::triangle::PreparedRay;
 use crate::{BuildError, triangle_bounds};
 
 /// Macrocell sizes the cost model chooses among.
@@ -115,44 +114,32 @@ impl MacrocellGrid {
 
     /// Closest hit: macro walk, fine walk inside occupied macrocells.
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
-        let mut best = Hit::MISS;
-        let mut stats = RayStats::default();
-        let Some(pr) = PreparedRay::new(ray) else { return (best, stats) };
-        let Some(fine_ray) = self.fine.geom.clip(&pr) else { return (best, stats) };
-        let a = self.a as f32;
-        // Exact: A is a power of two.
-        let macro_ray = GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..fine_ray };
-        let block = UVec3::splat(self.a);
-        let mut mb = Mailbox::default();
-        let mut t_enter = fine_ray.t0;
-        for m in Walker::new(traversal, &macro_ray, self.macro_res) {
-            stats.cells += 1;
-            let t_exit = m.t_exit;
-            if self.occupied(m.cell) {
-                let lo = m.cell * self.a;
-                let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0: t_enter, t1: t_exit, ..fine_ray };
-                for step in Walker::new(traversal, &sub, block) {
-                    stats.cells += 1;
-                    let c = lo + step.cell;
-                    test_refs(
-                        self.fine.cell(self.fine.geom.cell_index(c)),
-                        tris,
-                        &pr,
-                        &mut best,
-                        &mut stats,
-                        mailbox.then_some(&mut mb),
-                    );
-                    if best.t < step.t_exit {
-                        return (best, stats);
+        closest_hit(tris, ray, mailbox, |search| {
+            let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
+            let a = self.a as f32;
+            // Exact: A is a power of two.
+            let macro_ray = GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..fine_ray };
+            let block = UVec3::splat(self.a);
+            let mut t_enter = fine_ray.t0;
+            for m in Walker::new(traversal, &macro_ray, self.macro_res) {
+                search.visit_cell();
+                if self.occupied(m.cell) {
+                    let lo = m.cell * self.a;
+                    let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0: t_enter, t1: m.t_exit, ..fine_ray };
+                    for step in Walker::new(traversal, &sub, block) {
+                        search.visit_cell();
+                        let cell = self.fine.cell(self.fine.geom.cell_index(lo + step.cell));
+                        if search.test_cell(cell, step.t_exit) {
+                            return;
+                        }
                     }
                 }
+                if search.done_at(m.t_exit) {
+                    return;
+                }
+                t_enter = m.t_exit;
             }
-            if best.t < t_exit {
-                break;
-            }
-            t_enter = t_exit;
-        }
-        (best, stats)
+        })
     }
 }
 

@@ -7,7 +7,7 @@
 //! so it never skips a triangle that was not tested.
 //!
 //! Skipping is safe because the closest-hit loop keeps every tested triangle's hit as a
-//! candidate, even when it lies beyond the current cell (see [`crate::trace`]).
+//! candidate, even when it lies beyond the current cell (see [`crate::trace::closest_hit`]).
 
 /// Entries in the table (a power of two).
 pub const MAILBOX_SIZE: usize = 16;

@@ -24,10 +24,12 @@
 use glam::{UVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
+use crate::build::bucket::bucket;
+use crate::build::{BuildOptions, PhaseTimes};
+use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
 use crate::hierarchy::{CHILD, Hierarchy, MAX_CHILD_MARGIN, MAX_DEPTH, Node, cell_geometry, child_margin};
-use crate::insert::{InsertMode, bucket};
+use crate::insert::InsertMode;
 use crate::resolution::CostModel;
 use crate::{BuildError, triangle_bounds};
 
@@ -182,7 +184,7 @@ impl Ctx<'_> {
         }
         let mut sub = Subtree::default();
         sub.nodes.push(Node { res, first_cell: 0, depth, margin: margin as f32, scale });
-        sub.cells = crate::zeroed(geom.cell_count() as usize, "sub-grid cells")?;
+        sub.cells = crate::build::zeroed(geom.cell_count() as usize, "sub-grid cells")?;
         for z in 0..res.z {
             for y in 0..res.y {
                 for x in 0..res.x {
@@ -199,10 +201,10 @@ impl Ctx<'_> {
                             sub.refs.extend_from_slice(cell_ids);
                         }
                     }
-                    if sub.refs.len() as u64 > crate::flat::MAX_REFS {
+                    if sub.refs.len() as u64 > crate::build::MAX_REFS {
                         return Err(BuildError::TooManyReferences {
                             refs: sub.refs.len() as u64,
-                            limit: crate::flat::MAX_REFS,
+                            limit: crate::build::MAX_REFS,
                         });
                     }
                 }
@@ -225,7 +227,7 @@ pub fn build(
     }
     let bounds = times.record("bounds", || triangle_bounds(tris));
     let geom = GridGeometry::new(&bounds, top_res);
-    crate::check_cells(geom.res.to_array(), opts.cost.max_cells)?;
+    crate::build::check_cells(geom.res.to_array(), opts.cost.max_cells)?;
     let top = FlatGrid::build(tris, geom, build, times)?;
     let ctx = Ctx { tris, opts, insert: build.insert, top_res: geom.res, cells: geom.cell_count().into() };
     let cells = geom.cell_count() as usize;
@@ -247,8 +249,8 @@ pub fn build(
             (0..cells).map(one).collect()
         })?;
     let total: u64 = subtrees.iter().flatten().map(|s| s.refs.len() as u64).sum::<u64>() + top.refs.len() as u64;
-    if total > crate::flat::MAX_REFS {
-        return Err(BuildError::TooManyReferences { refs: total, limit: crate::flat::MAX_REFS });
+    if total > crate::build::MAX_REFS {
+        return Err(BuildError::TooManyReferences { refs: total, limit: crate::build::MAX_REFS });
     }
     let h = times.record("assemble", || {
         let mut root = Subtree::default();

@@ -18,11 +18,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::flat::FlatGrid;
 use crate::geometry::GridRay;
-use crate::mailbox::Mailbox;
 use crate::stats::RayStats;
-use crate::trace::test_refs;
+use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, Walker};
-use crate::triangle::PreparedRay;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProximityGrid {
@@ -43,37 +41,33 @@ impl ProximityGrid {
 
     /// Closest hit; empty cells with distance ≥ 2 are skipped in one jump (counted as one cell).
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
-        let mut best = Hit::MISS;
-        let mut stats = RayStats::default();
-        let Some(pr) = PreparedRay::new(ray) else { return (best, stats) };
-        let Some(mut gr) = self.grid.geom.clip(&pr) else { return (best, stats) };
-        let res = self.grid.geom.res;
-        let mut mb = Mailbox::default();
-        let mut walker = Walker::new(traversal, &gr, res);
-        while let Some(step) = walker.next() {
-            stats.cells += 1;
-            let idx = self.grid.geom.cell_index(step.cell);
-            let k = self.distance[idx] as u32;
-            if k >= 2 {
-                // Leave the empty cube around this cell; restart the walk there.
-                let lo = step.cell.saturating_sub(UVec3::splat(k - 1));
-                let hi = (step.cell + UVec3::splat(k)).min(res);
-                let t = exit_of_box(&gr, lo, hi).min(gr.t1);
-                if t > gr.t0 && t < gr.t1 {
-                    gr.t0 = t;
-                    walker = Walker::new(traversal, &gr, res);
-                    continue;
+        closest_hit(tris, ray, mailbox, |search| {
+            let Some(mut gr) = self.grid.geom.clip(&search.ray) else { return };
+            let res = self.grid.geom.res;
+            let mut walker = Walker::new(traversal, &gr, res);
+            while let Some(step) = walker.next() {
+                search.visit_cell();
+                let idx = self.grid.geom.cell_index(step.cell);
+                let k = self.distance[idx] as u32;
+                if k >= 2 {
+                    // Leave the empty cube around this cell; restart the walk there.
+                    let lo = step.cell.saturating_sub(UVec3::splat(k - 1));
+                    let hi = (step.cell + UVec3::splat(k)).min(res);
+                    let t = exit_of_box(&gr, lo, hi).min(gr.t1);
+                    if t > gr.t0 && t < gr.t1 {
+                        gr.t0 = t;
+                        walker = Walker::new(traversal, &gr, res);
+                        continue;
+                    }
+                    if t >= gr.t1 {
+                        return;
+                    }
                 }
-                if t >= gr.t1 {
-                    break;
+                if search.test_cell(self.grid.cell(idx), step.t_exit) {
+                    return;
                 }
             }
-            test_refs(self.grid.cell(idx), tris, &pr, &mut best, &mut stats, mailbox.then_some(&mut mb));
-            if best.t < step.t_exit {
-                break;
-            }
-        }
-        (best, stats)
+        })
     }
 }
 

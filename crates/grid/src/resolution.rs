@@ -210,12 +210,12 @@ pub fn choose(
 }
 
 /// The sample guess-and-check takes: the least T(m) among those a grid can hold (at most
-/// [`crate::flat::MAX_REFS`] references; for long slivers the model's optimum can lie far
+/// [`crate::build::MAX_REFS`] references; for long slivers the model's optimum can lie far
 /// beyond it), else the coarsest. `None` for an empty curve.
 pub fn best_sample(curve: &[CostSample]) -> Option<&CostSample> {
     curve
         .iter()
-        .filter(|s| s.n_m <= crate::flat::MAX_REFS)
+        .filter(|s| s.n_m <= crate::build::MAX_REFS)
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .or_else(|| curve.iter().min_by_key(|s| s.cells))
 }

@@ -5,7 +5,8 @@ use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
 use serde::{Deserialize, Serialize};
 
-use crate::flat::{BuildOptions, FlatGrid, PhaseTimes};
+use crate::build::{BuildOptions, PhaseTimes};
+use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
 use crate::hierarchy::{Hierarchy, HierarchyStats};
 use crate::macrocell::{MacroSample, MacrocellGrid};
@@ -257,7 +258,7 @@ pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildRepo
     // Every resolution, explicit or chosen, obeys the same cell limit as the auto choice.
     let choose = |times: &mut PhaseTimes, policy: Resolution| -> Result<ResolutionChoice, BuildError> {
         let c = choose(times, policy);
-        crate::check_cells(c.resolution, cfg.cost.max_cells)?;
+        crate::build::check_cells(c.resolution, cfg.cost.max_cells)?;
         Ok(c)
     };
     let mut macro_samples = Vec::new();

@@ -9,7 +9,7 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::flat::{BuildOptions, PhaseTimes};
+use crate::build::{BuildOptions, PhaseTimes};
 use crate::hierarchy::Hierarchy;
 use crate::multires::{MultiresOptions, Policy};
 use crate::resolution::{CostModel, cubic_cells};

@@ -32,11 +32,9 @@ use crate::accessor::{AccessorFault, read_components, read_uint, view_bytes};
 use crate::error::{PrimitiveRef, SceneError};
 pub use crate::gltf_file::MAX_FILE_BYTES;
 use crate::gltf_file::{map_gltf_error, precheck, precheck_external_buffers, read_file_bounded, validate};
-pub use crate::load_budget::LoadLimits;
+pub use crate::load_budget::{LoadLimits, MAX_TRIANGLES};
 use crate::mesh::{LoadReport, Mesh};
-/// Largest number of triangles in one flattened scene (indices must fit in `u32` with room for
-/// the "no hit" marker `0xFFFF_FFFF`).
-pub const MAX_TRIANGLES: u64 = 1 << 28;
+
 /// Largest coordinate magnitude after transforms: keeps every extent and grid computation
 /// finite in f32 (extents up to 2e30, products of cell counts far from overflow).
 pub const MAX_COORDINATE: f32 = 1e30;

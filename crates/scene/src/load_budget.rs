@@ -11,7 +11,10 @@
 use gltf::Document;
 
 use crate::error::SceneError;
-use crate::gltf_load::MAX_TRIANGLES;
+
+/// Largest number of triangles in one flattened scene (indices must fit in `u32` with room for
+/// the "no hit" marker `0xFFFF_FFFF`).
+pub const MAX_TRIANGLES: u64 = 1 << 28;
 
 /// What one file may make the loader allocate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

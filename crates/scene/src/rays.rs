@@ -1,4 +1,4 @@
-//! Rays and hits, their binary file formats, and the ray sets `gridrt rays` generates.
+//! The binary ray and hit file formats, and the ray sets `gridrt rays` generates.
 //!
 //! Ray file: no header, 32 bytes per ray, little-endian `f32 × 8`: `ox oy oz tmin dx dy dz
 //! tmax`. Directions need not be normalised; `t` is in units of the direction's length.
@@ -7,64 +7,14 @@
 
 use std::path::Path;
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Pod;
 use glam::Vec3;
 
 use crate::camera::Camera;
 use crate::error::RayFileError;
 use crate::mesh::{Aabb, Mesh};
+use crate::ray::{Hit, Ray};
 use crate::rng::Rng;
-
-/// One ray; the field order is the file's record order.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct Ray {
-    pub origin: [f32; 3],
-    pub tmin: f32,
-    pub dir: [f32; 3],
-    pub tmax: f32,
-}
-
-impl Ray {
-    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Ray {
-        Ray { origin: origin.to_array(), tmin, dir: dir.to_array(), tmax }
-    }
-    pub fn o(&self) -> Vec3 {
-        Vec3::from_array(self.origin)
-    }
-    pub fn d(&self) -> Vec3 {
-        Vec3::from_array(self.dir)
-    }
-    pub fn at(&self, t: f32) -> Vec3 {
-        self.o() + self.d() * t
-    }
-}
-
-/// Triangle index that marks a miss.
-pub const NO_HIT: u32 = u32::MAX;
-
-/// Closest hit of one ray; the field order is the file's record order.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct Hit {
-    pub t: f32,
-    pub triangle: u32,
-    pub u: f32,
-    pub v: f32,
-}
-
-impl Hit {
-    pub const MISS: Hit = Hit { t: f32::INFINITY, triangle: NO_HIT, u: 0.0, v: 0.0 };
-
-    pub fn is_hit(&self) -> bool {
-        self.triangle != NO_HIT
-    }
-
-    /// Bitwise equality (distinguishes -0.0 from 0.0; NaN never appears in a hit).
-    pub fn same_bits(&self, other: &Hit) -> bool {
-        bytemuck::bytes_of(self) == bytemuck::bytes_of(other)
-    }
-}
 
 fn records_from_le<T: Pod>(bytes: &[u8], name: &str, what: &'static str) -> Result<Vec<T>, RayFileError> {
     let record = std::mem::size_of::<T>();

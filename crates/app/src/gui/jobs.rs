@@ -8,7 +8,11 @@ use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 
 use glam::Vec3;
-use gridrt_grid::{AnyGrid, BuildReport, GridConfig, structure};
+use gridrt_grid::GridConfig;
+
+#[cfg(target_arch = "wasm32")]
+use super::built::decode_structure;
+use super::built::{Built, build_structure};
 use gridrt_scene::{Aabb, LoadReport};
 use web_time::Instant;
 
@@ -64,36 +68,6 @@ pub fn load_scene(source: &SceneSource) -> Result<LoadedScene, String> {
         _ => source.label(),
     };
     Ok(LoadedScene { name, tris: Arc::new(mesh.triangles()), bounds: mesh.bounds(), report })
-}
-
-/// A structure built for one scene (by scene generation number) and configuration.
-#[derive(Debug)]
-pub struct Built {
-    pub scene_generation: u64,
-    pub config: GridConfig,
-    pub grid: AnyGrid,
-    pub report: BuildReport,
-    /// Built by the browser's build worker (not on the page's or the app's thread).
-    pub in_worker: bool,
-}
-
-/// Builds `config` over `tris`.
-pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation: u64) -> Result<Built, String> {
-    let (grid, report) =
-        structure::build(tris, config).map_err(|e| format!("building the {} grid: {e}", config.kind))?;
-    Ok(Built { scene_generation, config: *config, grid, report, in_worker: false })
-}
-
-/// A built structure as bytes: how the browser's build worker hands it to the page.
-#[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
-pub fn encode_structure(grid: &AnyGrid, report: &BuildReport) -> Result<Vec<u8>, String> {
-    postcard::to_allocvec(&(grid, report)).map_err(|e| format!("encoding the structure: {e}"))
-}
-
-/// The inverse of [`encode_structure`].
-#[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
-pub fn decode_structure(bytes: &[u8]) -> Result<(AnyGrid, BuildReport), String> {
-    postcard::from_bytes(bytes).map_err(|e| format!("decoding the structure from the build worker: {e}"))
 }
 
 /// Starts building `config` for the scene of `scene_generation`: natively on a thread; in the
@@ -179,6 +153,7 @@ impl<T: Send + 'static> Job<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gui::built::{decode_structure, encode_structure};
 
     #[test]
     fn scenes_load_from_bytes_and_bad_files_give_messages() {

@@ -6,65 +6,42 @@
 //! previous structure stays on screen meanwhile), and when anything the image depends on
 //! changes a frame is rendered.
 
+pub mod built;
 pub mod cost_plot;
 pub mod explainer;
 pub mod hook;
+mod input;
 pub mod jobs;
+mod lifecycle;
+mod measure;
 pub mod orbit;
 pub mod panels;
 pub mod settings;
+mod smoke;
 pub mod viewport;
 #[cfg(target_arch = "wasm32")]
 pub mod web;
 
-use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use eframe::egui::{self, Key, PointerButton, Sense, Vec2};
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use eframe::egui::{self, Sense, Vec2};
 use gridrt_gpu::{RenderOptions, View};
-use gridrt_grid::{GridConfig, GridKind, Resolution};
+use gridrt_grid::GridConfig;
 use gridrt_scene::Camera;
 use web_time::Instant;
 
 use crate::cli::AppArgs;
-use hook::{CapturedFrame, Hook, HookCommand, HookStats};
-use jobs::{Built, Job, LoadedScene, SceneSource};
+use built::Built;
+use hook::Hook;
+use jobs::{Job, LoadedScene, SceneSource};
+use lifecycle::{BuiltState, SceneState};
 use orbit::Orbit;
 use settings::Settings;
+use smoke::Smoke;
 use viewport::{Gpu, Viewport};
 
 /// How a smoke run (`--screenshot`) ended: `Ok(message)` or `Err(reason)`.
 pub type SmokeStatus = Arc<Mutex<Option<Result<String, String>>>>;
-
-/// `--screenshot out.png --frames N`: render N frames, save the window, exit.
-#[derive(Debug)]
-struct Smoke {
-    path: PathBuf,
-    frames: u32,
-    requested: bool,
-    shot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
-    status: SmokeStatus,
-    started: Instant,
-}
-
-/// Seconds a smoke run may take before it gives up.
-const SMOKE_TIMEOUT_S: f64 = 600.0;
-
-#[derive(Debug)]
-struct SceneState {
-    loaded: LoadedScene,
-    gpu: Option<GpuScene>,
-    generation: u64,
-}
-
-#[derive(Debug)]
-struct BuiltState {
-    built: Built,
-    gpu: Option<GpuStructure>,
-    /// Changes with every new structure (part of the render key).
-    id: u64,
-}
 
 /// Everything a frame depends on: a new frame is rendered when this changes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -222,200 +199,8 @@ impl GridrtApp {
         app
     }
 
-    /// Starts loading a scene; the current one stays until the new one is ready.
-    fn open(&mut self, ctx: &egui::Context, source: SceneSource) {
-        let label = source.label();
-        self.scene_job = Some(Job::spawn(format!("loading {label}"), ctx, move || jobs::load_scene(&source)));
-    }
-
     fn view(&self) -> View {
         self.settings.view.parse().unwrap_or_default()
-    }
-
-    fn fail_smoke(&mut self, ctx: &egui::Context, why: String) {
-        if let Some(s) = &self.smoke {
-            *s.status.lock().expect("smoke status") = Some(Err(why));
-            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-        }
-    }
-
-    /// Collects finished jobs and starts the builds the settings ask for.
-    fn poll_jobs(&mut self, ctx: &egui::Context) {
-        if let Some(job) = &mut self.scene_job
-            && let Some(r) = job.poll()
-        {
-            self.scene_job = None;
-            match r.and_then(|r| r) {
-                Ok(loaded) => {
-                    if let Err(e) = self.set_scene(loaded) {
-                        self.error = Some(e.clone());
-                        self.fail_smoke(ctx, e);
-                    }
-                }
-                Err(e) => {
-                    self.error = Some(e.clone());
-                    self.fail_smoke(ctx, e);
-                }
-            }
-        }
-        if let Some(job) = &mut self.build_job
-            && let Some(r) = job.poll()
-        {
-            self.build_job = None;
-            match r.and_then(|r| r) {
-                Ok(b) if Some(b.scene_generation) == self.scene.as_ref().map(|s| s.generation) => self.set_built(b),
-                Ok(_) => {} // built for a scene that has been replaced since
-                Err(e) => {
-                    self.build_error = Some((self.settings.grid, e.clone()));
-                    self.fail_smoke(ctx, e);
-                }
-            }
-        }
-        // Rebuild when the wanted structure differs from the built one (one build at a time;
-        // the newest settings win when it finishes).
-        if self.build_job.is_none()
-            && let Some(scene) = &self.scene
-        {
-            let want = self.settings.grid;
-            let have = self.built.as_ref().map(|b| (b.built.scene_generation, b.built.config));
-            let failed = self.build_error.as_ref().is_some_and(|(c, _)| *c == want);
-            if have != Some((scene.generation, want)) && !failed {
-                self.build_error = None;
-                let tris = scene.loaded.tris.clone();
-                let generation = scene.generation;
-                self.build_job = Some(jobs::spawn_build(ctx, tris, want, generation));
-            }
-        }
-        if self.measure_at_start && self.last_key.is_some() && self.built.is_some() && self.build_job.is_none() {
-            self.measure_at_start = false;
-            if !self.start_measurement() {
-                let why = "--measure: the structure has no sampled cost curve (use a flat or macrocell grid with auto resolution)";
-                self.error = Some(why.into());
-                self.fail_smoke(ctx, why.into());
-            }
-        }
-        self.poll_measurement(ctx);
-    }
-
-    /// Makes `loaded` the current scene; when its GPU upload fails the previous scene stays and
-    /// the error is returned.
-    fn set_scene(&mut self, loaded: LoadedScene) -> Result<(), String> {
-        let gpu_scene = match &self.gpu {
-            Some(g) => Some(
-                GpuScene::new(&g.ctx, &loaded.tris)
-                    .and_then(|s| g.ctx.check_device().map(|()| s))
-                    .map_err(|e| format!("{}: {e} (the previous scene stays)", loaded.name))?,
-            ),
-            None => None,
-        };
-        self.scene_generation += 1;
-        let aspect = self.last_key.map_or(1.0, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
-        self.orbit = match self.initial_camera.take() {
-            Some(cam) => Orbit::from_camera(&cam, &loaded.bounds),
-            None => Orbit::fit(&loaded.bounds, aspect),
-        };
-        self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
-        self.measurement = Default::default();
-        self.build_error = None;
-        Ok(())
-    }
-
-    fn set_built(&mut self, built: Built) {
-        self.worker_builds += u64::from(built.in_worker);
-        let gpu = match &self.gpu {
-            Some(g) => match GpuStructure::new(&g.ctx, &built.grid).and_then(|s| g.ctx.check_device().map(|()| s)) {
-                Ok(s) => Some(s),
-                Err(e) => {
-                    // The previous structure stays on screen; this configuration is not retried.
-                    self.build_error = Some((
-                        built.config,
-                        format!("uploading the {} grid: {e} (the previous one stays)", built.config.kind),
-                    ));
-                    return;
-                }
-            },
-            None => None,
-        };
-        self.built_counter += 1;
-        self.built = Some(BuiltState { built, gpu, id: self.built_counter });
-    }
-
-    /// Starts timing a flat grid at each resolution the cost model sampled (false when the
-    /// current structure has no sampled curve).
-    fn start_measurement(&mut self) -> bool {
-        let Some(c) = self.built.as_ref().and_then(|b| b.built.report.resolution_choice.as_ref()) else { return false };
-        if c.curve.is_empty() {
-            return false;
-        }
-        self.measurement = cost_plot::Measurement {
-            pending: c.curve.iter().map(|s| s.resolution).collect(),
-            results: Vec::new(),
-            total: c.curve.len(),
-        };
-        true
-    }
-
-    /// The cost-plot measurement: builds the next sampled resolution off the UI thread, then
-    /// renders it once, timed.
-    fn poll_measurement(&mut self, ctx: &egui::Context) {
-        if let Some(job) = &mut self.measure_job
-            && let Some(r) = job.poll()
-        {
-            self.measure_job = None;
-            match r.and_then(|r| r) {
-                Ok(b) => self.time_frame(&b),
-                Err(e) => {
-                    self.error = Some(e);
-                    self.measurement.pending.clear();
-                }
-            }
-        }
-        if self.measure_job.is_none()
-            && !self.measurement.pending.is_empty()
-            && let Some(scene) = &self.scene
-        {
-            let res = self.measurement.pending[0];
-            let cfg =
-                GridConfig { kind: GridKind::Flat, resolution: Some(Resolution::Explicit(res)), ..self.settings.grid };
-            let tris = scene.loaded.tris.clone();
-            let generation = scene.generation;
-            self.measure_job =
-                Some(Job::spawn("measuring", ctx, move || jobs::build_structure(&tris, &cfg, generation)));
-        }
-    }
-
-    #[cfg(not(target_arch = "wasm32"))]
-    fn time_frame(&mut self, b: &Built) {
-        let res = self.measurement.pending.remove(0);
-        let (Some(gpu), Some(scene), Some(key)) = (&self.gpu, &self.scene, self.last_key) else { return };
-        let Some(gs) = &scene.gpu else { return };
-        let s = match GpuStructure::new(&gpu.ctx, &b.grid) {
-            Ok(s) => s,
-            Err(e) => {
-                self.error = Some(e.to_string());
-                return;
-            }
-        };
-        let opts = self.render_options(key.camera, key.size);
-        match self.viewport.render_blocking(gpu, gs, &s, &scene.loaded.bounds, &opts) {
-            Ok(ms) => {
-                let m = (res[0] as f64 * res[1] as f64 * res[2] as f64).cbrt();
-                self.measurement.results.push((m, ms));
-            }
-            Err(e) => {
-                self.viewport.cancel();
-                self.error = Some(e.to_string());
-            }
-        }
-        // The measured frame replaced the image: render the real structure again.
-        self.last_key = None;
-    }
-
-    #[cfg(target_arch = "wasm32")]
-    fn time_frame(&mut self, _b: &Built) {
-        // Timing needs a blocking wait, which the browser does not allow.
-        self.measurement.pending.clear();
-        self.error = Some("frame-time measurement is not available in the browser".into());
     }
 
     fn render_options(&self, camera: Camera, size: [u32; 2]) -> RenderOptions {
@@ -430,259 +215,7 @@ impl GridrtApp {
         }
     }
 
-    fn menu(&mut self, ui: &mut egui::Ui) {
-        egui::MenuBar::new().ui(ui, |ui| {
-            ui.menu_button("File", |ui| {
-                #[cfg(not(target_arch = "wasm32"))]
-                if ui.button("Open…").clicked() {
-                    if let Some(p) = rfd::FileDialog::new().add_filter("glTF", &["glb", "gltf"]).pick_file() {
-                        self.open(ui.ctx(), SceneSource::Path(p));
-                    }
-                    ui.close();
-                }
-                // In the browser the picker is asynchronous: its bytes arrive like a dropped file's.
-                #[cfg(target_arch = "wasm32")]
-                if ui.button("Open…").clicked() {
-                    let (tx, rx) = std::sync::mpsc::channel();
-                    let ui_ctx = ui.ctx().clone();
-                    wasm_bindgen_futures::spawn_local(async move {
-                        let picked = rfd::AsyncFileDialog::new().add_filter("glTF", &["glb", "gltf"]).pick_file().await;
-                        if let Some(f) = picked {
-                            let _ = tx.send(Ok((f.file_name(), f.read().await)));
-                            ui_ctx.request_repaint();
-                        }
-                    });
-                    self.dropped = Some(rx);
-                    ui.close();
-                }
-                if ui.button("Default scene").clicked() {
-                    self.open(ui.ctx(), SceneSource::Default);
-                    ui.close();
-                }
-                #[cfg(not(target_arch = "wasm32"))]
-                if ui.button("Save image…").clicked() {
-                    self.save_image();
-                    ui.close();
-                }
-                #[cfg(not(target_arch = "wasm32"))]
-                if ui.button("Quit").clicked() {
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
-                }
-            });
-            ui.menu_button("Windows", |ui| {
-                ui.checkbox(&mut self.settings.show_cost_plot, "Cost model");
-                ui.checkbox(&mut self.settings.show_explainer, "Traversal explainer");
-            });
-            if ui.button("Reset camera").clicked() {
-                self.reset_camera();
-            }
-            ui.label("drag: orbit · right/shift-drag: pan · wheel: zoom · F: reset · drop a .glb to open");
-        });
-    }
-
-    fn reset_camera(&mut self) {
-        if let Some(s) = &self.scene {
-            let aspect = self.last_key.map_or(1.5, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
-            self.orbit = Orbit::fit(&s.loaded.bounds, aspect);
-        }
-    }
-
-    #[cfg(not(target_arch = "wasm32"))]
-    fn save_image(&mut self) {
-        let Some(path) = rfd::FileDialog::new().add_filter("PNG", &["png"]).set_file_name("gridrt.png").save_file()
-        else {
-            return;
-        };
-        let (Some(gpu), Some(scene), Some(b), Some(key)) = (&self.gpu, &self.scene, &self.built, self.last_key) else {
-            return;
-        };
-        let (Some(gs), Some(s)) = (&scene.gpu, &b.gpu) else { return };
-        let opts = self.render_options(key.camera, key.size);
-        let result =
-            gpu.renderer.render(&gpu.ctx, gs, s, &scene.loaded.bounds, &opts).map_err(|e| e.to_string()).and_then(
-                |f| {
-                    image::save_buffer(&path, &f.rgba, f.width, f.height, image::ExtendedColorType::Rgba8)
-                        .map_err(|e| e.to_string())
-                },
-            );
-        if let Err(e) = result {
-            self.error = Some(format!("saving {}: {e}", path.display()));
-        }
-    }
-
-    /// Camera input on the image: mouse and keys.
-    fn camera_input(&mut self, ui: &egui::Ui, resp: &egui::Response) {
-        let d = resp.drag_delta();
-        let shift = ui.input(|i| i.modifiers.shift);
-        let h = resp.rect.height().max(1.0);
-        if resp.dragged_by(PointerButton::Primary) && !shift {
-            self.orbit.rotate(d.x * 0.008, d.y * 0.008);
-        } else if resp.dragged_by(PointerButton::Secondary)
-            || resp.dragged_by(PointerButton::Middle)
-            || (resp.dragged_by(PointerButton::Primary) && shift)
-        {
-            self.orbit.pan(d.x / h, d.y / h);
-        }
-        if resp.hovered() {
-            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
-                self.orbit.zoom((-scroll * 0.0015).exp());
-            }
-        }
-        if resp.double_clicked() {
-            self.reset_camera();
-        }
-        if ui.ctx().egui_wants_keyboard_input() {
-            return;
-        }
-        let step = 0.04;
-        let (l, r, u, dn, zin, zout, reset) = ui.input(|i| {
-            (
-                i.key_down(Key::ArrowLeft) || i.key_down(Key::A),
-                i.key_down(Key::ArrowRight) || i.key_down(Key::D),
-                i.key_down(Key::ArrowUp) || i.key_down(Key::W),
-                i.key_down(Key::ArrowDown) || i.key_down(Key::S),
-                i.key_down(Key::Plus) || i.key_down(Key::Equals) || i.key_down(Key::E),
-                i.key_down(Key::Minus) || i.key_down(Key::Q),
-                i.key_pressed(Key::F) || i.key_pressed(Key::Home),
-            )
-        });
-        if l {
-            self.orbit.rotate(-step, 0.0);
-        }
-        if r {
-            self.orbit.rotate(step, 0.0);
-        }
-        if u {
-            self.orbit.rotate(0.0, step);
-        }
-        if dn {
-            self.orbit.rotate(0.0, -step);
-        }
-        if zin {
-            self.orbit.zoom(0.96);
-        }
-        if zout {
-            self.orbit.zoom(1.04);
-        }
-        if reset {
-            self.reset_camera();
-        }
-        if l || r || u || dn || zin || zout {
-            ui.ctx().request_repaint();
-        }
-    }
-
     /// The central image; submits a frame when the render key changed.
-    /// Shares the test hook with the page (`window.gridrt`).
-    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
-    pub fn with_hook(self, hook: Hook) -> GridrtApp {
-        let repaint = self.hook.lock().expect("hook lock").repaint.clone();
-        hook.lock().expect("hook lock").repaint = repaint;
-        GridrtApp { hook, ..self }
-    }
-
-    /// Applies the commands the page sent; captures wait until the app is idle.
-    fn apply_hook_commands(&mut self, ctx: &egui::Context) {
-        let commands: Vec<HookCommand> = self.hook.lock().expect("hook lock").commands.drain(..).collect();
-        for c in commands {
-            match c {
-                HookCommand::Grid(k) => self.settings.grid.kind = k,
-                HookCommand::View(v) => self.settings.view = v.name().into(),
-                HookCommand::Traversal(t) => self.settings.traversal = t,
-                HookCommand::Camera(cam) => match &self.scene {
-                    Some(s) => self.orbit = Orbit::from_camera(&cam, &s.loaded.bounds),
-                    None => self.initial_camera = Some(cam),
-                },
-                HookCommand::FrameSize(size) => self.frame_size = size,
-                HookCommand::Open { name, bytes } => self.open(ctx, SceneSource::Bytes { name, bytes }),
-                HookCommand::Capture(id) => self.captures.push_back(id),
-                HookCommand::DismissError => {
-                    self.error = None;
-                    self.viewport.error = None;
-                }
-            }
-        }
-    }
-
-    /// Nothing is loading, building or rendering, and the last frame shows the current settings.
-    fn idle(&self) -> bool {
-        self.scene_job.is_none()
-            && self.build_job.is_none()
-            && self.measure_job.is_none()
-            && !self.viewport.busy()
-            && self.frame_current
-            && self.hook.lock().expect("hook lock").commands.is_empty()
-    }
-
-    /// Starts a waiting capture once idle, collects a finished one, and publishes the stats.
-    fn update_hook(&mut self) {
-        if self.first_frame_ms.is_none() && self.viewport.frames_done > 0 {
-            #[cfg(target_arch = "wasm32")]
-            let ms = web::page_ms();
-            #[cfg(not(target_arch = "wasm32"))]
-            let ms = Some(self.started.elapsed().as_secs_f64() * 1e3);
-            self.first_frame_ms = ms;
-        }
-        if self.capture.is_none()
-            && !self.captures.is_empty()
-            && self.idle()
-            && let Some(gpu) = &self.gpu
-            && let Some(slot) = self.viewport.capture(gpu)
-        {
-            let id = self.captures.pop_back().expect("a capture");
-            self.captures.clear();
-            self.capture = Some((id, slot));
-        }
-        if let Some((id, slot)) = &self.capture {
-            let done = slot.lock().expect("capture lock").take();
-            match done {
-                Some(Ok((width, height, rgba))) => {
-                    self.hook.lock().expect("hook lock").frame = Some(CapturedFrame { id: *id, width, height, rgba });
-                    self.capture = None;
-                }
-                Some(Err(e)) => {
-                    self.error = Some(format!("reading the frame back: {e}"));
-                    self.capture = None;
-                }
-                None => {}
-            }
-        }
-        let built = self.built.as_ref().map(|b| &b.built);
-        let last = self.viewport.last;
-        let stats = HookStats {
-            frames: self.viewport.frames_done,
-            adapter: self.gpu.as_ref().map_or_else(String::new, |g| g.ctx.adapter_name()),
-            grid: built.map_or_else(String::new, |b| b.config.kind.to_string()),
-            traversal: self.settings.traversal.short_name().into(),
-            view: last.map_or_else(String::new, |f| f.view.name().into()),
-            scene: self.scene.as_ref().map_or_else(String::new, |s| s.loaded.name.clone()),
-            triangles: self.scene.as_ref().map_or(0, |s| s.loaded.tris.len() as u64),
-            mean_cells_per_ray: last.map_or(0.0, |f| f.mean_cells()),
-            mean_tests_per_ray: last.map_or(0.0, |f| f.mean_tests()),
-            width: last.map_or(0, |f| f.width),
-            height: last.map_or(0, |f| f.height),
-            frame_ms: last.map_or(0.0, |f| f.ms),
-            build_ms: built.map_or(0.0, |b| b.report.times.total()),
-            building: self.build_job.is_some(),
-            worker_builds: self.worker_builds,
-            idle: self.idle() && self.captures.is_empty() && self.capture.is_none(),
-            error: [&self.error, &self.gpu_error, &self.viewport.error]
-                .into_iter()
-                .flatten()
-                .cloned()
-                .chain(self.build_error.as_ref().map(|(_, e)| e.clone()))
-                .reduce(|a, b| format!("{a}; {b}")),
-            first_frame_ms: self.first_frame_ms,
-        };
-        self.hook.lock().expect("hook lock").stats = stats;
-        if (!self.captures.is_empty() || self.capture.is_some())
-            && let Some(c) = &self.hook.lock().expect("hook lock").repaint
-        {
-            c.request_repaint();
-        }
-    }
-
     fn central(&mut self, ui: &mut egui::Ui) {
         self.frame_current = false;
         let avail = ui.available_size();
@@ -761,93 +294,6 @@ impl GridrtApp {
         self.frame_current = true;
         if self.viewport.busy() {
             ui.ctx().request_repaint();
-        }
-    }
-
-    /// Smoke mode: once enough frames are done, screenshot the window, save it and close.
-    fn smoke_step(&mut self, ctx: &egui::Context) {
-        let frames_done = self.viewport.frames_done;
-        let Some(s) = &mut self.smoke else { return };
-        ctx.request_repaint();
-        if s.started.elapsed().as_secs_f64() > SMOKE_TIMEOUT_S {
-            let why = format!("smoke run timed out after {SMOKE_TIMEOUT_S} s ({frames_done} frames done)");
-            self.fail_smoke(ctx, why);
-            return;
-        }
-        let measuring = self.measure_at_start || self.measurement.running() || self.measure_job.is_some();
-        if !s.requested && frames_done >= s.frames as u64 && !self.viewport.busy() && !measuring {
-            s.requested = true;
-            let shot = s.shot.clone();
-            ctx.request_screenshot(move |img| *shot.lock().expect("screenshot") = Some(img));
-            return;
-        }
-        let Some(img) = s.shot.lock().expect("screenshot").take() else { return };
-        let rgba: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
-        let [w, h] = img.size;
-        let result = image::save_buffer(&s.path, &rgba, w as u32, h as u32, image::ExtendedColorType::Rgba8)
-            .map(|()| {
-                let f = self.viewport.last;
-                format!(
-                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}",
-                    w,
-                    h,
-                    s.path.display(),
-                    f.map_or(String::new(), |f| format!(
-                        " (last frame {}x{}: {:.1} ms, {:.2} cells/ray, {:.2} tests/ray)",
-                        f.width,
-                        f.height,
-                        f.ms,
-                        f.mean_cells(),
-                        f.mean_tests()
-                    )),
-                    match self.measurement.results.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
-                        Some(best) => format!(
-                            "; cost model: {} resolutions timed, fastest m = {:.1} ({:.1} ms)",
-                            self.measurement.results.len(),
-                            best.0,
-                            best.1
-                        ),
-                        None => String::new(),
-                    }
-                )
-            })
-            .map_err(|e| format!("writing {}: {e}", s.path.display()));
-        *s.status.lock().expect("smoke status") = Some(result);
-        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-    }
-
-    /// A .glb/.gltf dropped on the window opens (the first one, if several).
-    #[cfg(not(target_arch = "wasm32"))]
-    fn dropped_files(&mut self, ctx: &egui::Context) {
-        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
-        if let Some(f) = dropped.into_iter().next() {
-            self.open(ctx, SceneSource::Path(f.path().to_path_buf()));
-        }
-    }
-
-    /// In the browser a dropped file's bytes arrive asynchronously; the load starts when they
-    /// are here.
-    #[cfg(target_arch = "wasm32")]
-    fn dropped_files(&mut self, ctx: &egui::Context) {
-        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
-        if let Some(f) = dropped.into_iter().next() {
-            let (tx, rx) = std::sync::mpsc::channel();
-            let name = f.path().to_string_lossy().into_owned();
-            let ui = ctx.clone();
-            wasm_bindgen_futures::spawn_local(async move {
-                let _ = tx.send(f.bytes_async().await.map(|b| (name, b)));
-                ui.request_repaint();
-            });
-            self.dropped = Some(rx);
-        }
-        if let Some(rx) = &self.dropped
-            && let Ok(r) = rx.try_recv()
-        {
-            self.dropped = None;
-            match r {
-                Ok((name, bytes)) => self.open(ctx, SceneSource::Bytes { name, bytes: bytes.into() }),
-                Err(e) => self.error = Some(format!("reading the dropped file: {e}")),
-            }
         }
     }
 }

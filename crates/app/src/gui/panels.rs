@@ -7,7 +7,7 @@ use gridrt_gpu::View;
 use gridrt_grid::multires::Policy;
 use gridrt_grid::{GridKind, InsertMode, Resolution, Traversal};
 
-use super::jobs::Built;
+use super::built::Built;
 use super::settings::Settings;
 use super::viewport::FrameStats;
 use crate::format::human_bytes;

@@ -144,8 +144,8 @@ pub fn build_in_worker(tris: &[f32], config: &str) -> Result<Vec<u8>, JsValue> {
             [glam::Vec3::new(c[0], c[1], c[2]), glam::Vec3::new(c[3], c[4], c[5]), glam::Vec3::new(c[6], c[7], c[8])]
         })
         .collect();
-    let built = super::jobs::build_structure(&tris, &config, 0).map_err(js_error)?;
-    super::jobs::encode_structure(&built.grid, &built.report).map_err(js_error)
+    let built = super::built::build_structure(&tris, &config, 0).map_err(js_error)?;
+    super::built::encode_structure(&built.grid, &built.report).map_err(js_error)
 }
 
 type Reply = Box<dyn FnOnce(Result<Vec<u8>, String>)>;

@@ -9,8 +9,9 @@ use glam::Vec3;
 use gridrt_gpu::trace::Tracer;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_grid::multires::{MultiresOptions, Policy};
+use gridrt_grid::ray::PreparedRay;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::triangle::{PreparedRay, intersect};
+use gridrt_grid::triangle::intersect;
 use gridrt_grid::{AnyGrid, GridConfig, GridKind, Resolution, Traversal, hierarchy, structure};
 use gridrt_scene::procedural::{self, SceneKind};
 use gridrt_scene::rays::{camera_rays, random_rays};
@@ -18,6 +19,7 @@ use gridrt_scene::{Camera, Mesh, Ray};
 
 use super::common::gpu;
 
+/// Rays per scene in the full matrix (`GRIDRT_FULL_MATRICES=1`); a tenth by default.
 const RAYS: usize = 100_000;
 
 fn rays_for(mesh: &Mesh, n: usize) -> Vec<Ray> {
@@ -184,7 +186,7 @@ fn gpu_matches_cpu_on_procedural_scenes() {
     ];
     let mut total = Tally::default();
     for (name, mesh) in scenes {
-        let t = compare(name, &mesh.triangles(), &rays_for(&mesh, RAYS), &GridKind::ALL);
+        let t = compare(name, &mesh.triangles(), &rays_for(&mesh, gridrt_testkit::matrix_rays(RAYS)), &GridKind::ALL);
         total.add(&t);
     }
     println!("total: {total:?}");
@@ -197,27 +199,14 @@ fn gpu_matches_cpu_on_shared_scenes() {
     if gpu().is_none() {
         return;
     }
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
-    let Ok(rd) = std::fs::read_dir(&dir) else {
-        assert!(
-            !std::env::var("GRIDRT_REQUIRE_SHARED_SCENES").is_ok_and(|x| x == "1"),
-            "GRIDRT_REQUIRE_SHARED_SCENES=1 but {} is missing",
-            dir.display()
-        );
-        println!("../shared/scenes not present: nothing to do");
-        return;
-    };
-    let mut paths: Vec<_> =
-        rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "glb")).collect();
-    paths.sort();
     let mut total = Tally::default();
-    for p in paths {
+    for p in gridrt_testkit::shared_scenes() {
         let (mesh, _) = gridrt_scene::gltf_load::load_path(&p).unwrap();
         let name = p.file_name().unwrap().to_string_lossy().to_string();
         let t = compare_with(
             &name,
             &mesh.triangles(),
-            &rays_for(&mesh, RAYS),
+            &rays_for(&mesh, gridrt_testkit::matrix_rays(RAYS)),
             &GridKind::ALL,
             &[true],
             &GridConfig::default(),

@@ -5,8 +5,9 @@
 
 use glam::{IVec3, UVec3};
 
-use super::{CellStep, argmax3};
+use super::CellStep;
 use crate::geometry::GridRay;
+use crate::ray::argmax3;
 
 #[derive(Clone, Debug)]
 pub struct Bresenham {

@@ -15,8 +15,9 @@
 
 use glam::{IVec3, UVec3};
 
-use super::{CellStep, argmax3};
+use super::CellStep;
 use crate::geometry::GridRay;
+use crate::ray::argmax3;
 
 /// Fractional bits of the fixed-point minor coordinates.
 pub const FRAC_BITS: u32 = 20;

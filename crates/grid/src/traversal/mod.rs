@@ -111,19 +111,6 @@ impl Iterator for Walker {
     }
 }
 
-/// Index of the largest of three values (the dominant axis); ties go to the lowest axis, as in
-/// `argmax3` of shaders/shared/ray.wgsl.
-#[inline]
-pub fn argmax3<T: PartialOrd>(v: [T; 3]) -> usize {
-    if v[0] >= v[1] && v[0] >= v[2] {
-        0
-    } else if v[1] >= v[2] {
-        1
-    } else {
-        2
-    }
-}
-
 /// Index of the smallest of three values; ties go to the lowest axis (same rule everywhere,
 /// GPU included, so cell sequences are reproducible).
 #[inline]

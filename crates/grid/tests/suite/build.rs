@@ -14,7 +14,7 @@ fn tris_of(kind: SceneKind, size: u32) -> Vec<[Vec3; 3]> {
 #[test]
 fn layout_is_consistent_and_sorted() {
     let tris = tris_of(SceneKind::Particles, 3000);
-    for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+    for insert in InsertMode::ALL {
         let (g, _, _) =
             build_flat(&tris, Resolution::Cubic(17), &CostModel::default(), BuildOptions { insert, parallel: true })
                 .unwrap();
@@ -71,7 +71,7 @@ fn tri_box_overlap_matches_known_cases() {
 fn parallel_build_is_bit_identical_to_serial() {
     for kind in [SceneKind::Particles, SceneKind::Slivers, SceneKind::Mountain] {
         let tris = tris_of(kind, if kind == SceneKind::Mountain { 6 } else { 20_000 });
-        for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+        for insert in InsertMode::ALL {
             let geom = GridGeometry::new(&triangle_bounds(&tris), [37, 23, 41]);
             let a = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: false }, &mut PhaseTimes::default())
                 .unwrap();
@@ -134,7 +134,7 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     let tris = tris_of(SceneKind::Mountain, 6);
     let b = triangle_bounds(&tris);
     let model = CostModel::default();
-    for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+    for insert in InsertMode::ALL {
         let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, insert, true);
         assert!(choice.curve.len() >= 5, "{:?}", choice.curve);
         assert!(choice.curve.windows(2).all(|w| w[0].m < w[1].m));
@@ -217,7 +217,7 @@ fn auto_resolution_never_exceeds_the_reference_limit() {
     let b = triangle_bounds(&tris);
     let model = CostModel { max_cells_per_triangle: 1e4, max_cells: 1 << 27, ..CostModel::default() };
     let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
-    let limit = gridrt_grid::flat::MAX_REFS;
+    let limit = gridrt_grid::build::MAX_REFS;
     assert!(choice.curve.iter().any(|s| s.n_m > limit), "the test needs unbuildable samples: {:?}", choice.curve);
     let chosen = choice.curve.iter().find(|s| s.resolution == choice.resolution).unwrap();
     assert!(chosen.n_m <= limit, "{chosen:?}");

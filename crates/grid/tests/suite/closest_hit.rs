@@ -12,17 +12,19 @@ use gridrt_scene::rays::inside_rays;
 
 use super::common::*;
 
+/// Rays per scene in the full matrix (`GRIDRT_FULL_MATRICES=1`); a tenth by default.
 const RAYS: usize = 100_000;
 
 /// Builds every kind × insertion serially and in parallel (must be identical), then compares
 /// every traversal × mailbox against the reference. `all_builds`: also trace through the
-/// parallel builds (identical by the check, so optional for big scenes).
-pub fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: bool) {
+/// parallel builds (identical by the check, so optional for big scenes). `inserts`: the
+/// insertion modes to build with.
+pub fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: bool, inserts: &[InsertMode]) {
     let (expected, ref_stats) = reference(tris, rays);
     println!("{name}: {} triangles, {} rays, {} hits", tris.len(), rays.len(), ref_stats.hits);
     assert!(ref_stats.hits as usize > rays.len() / 20, "{name}: suspiciously few hits ({})", ref_stats.hits);
     for kind in GridKind::ALL {
-        for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+        for &insert in inserts {
             let mut grids = Vec::new();
             for parallel in [false, true] {
                 let cfg = GridConfig { kind, build: BuildOptions { insert, parallel }, ..GridConfig::default() };
@@ -69,23 +71,21 @@ pub fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: boo
 fn every_grid_equals_brute_force_on_procedural_scenes() {
     for (name, g) in procedural_scenes() {
         let tris = g.mesh.triangles();
-        let rays = mixed_rays(&g.mesh, &g.inside_points, RAYS, 11);
-        check_scene(&name, &tris, &rays, true);
+        let rays = mixed_rays(&g.mesh, &g.inside_points, matrix_rays(RAYS), 11);
+        check_scene(&name, &tris, &rays, true, &InsertMode::ALL);
     }
 }
 
 #[test]
 fn every_grid_equals_brute_force_on_shared_scenes() {
-    let scenes = shared_scenes();
-    if scenes.is_empty() {
-        println!("../shared/scenes not present: nothing to do (procedural scenes are tested separately)");
-        return;
-    }
-    for path in scenes {
-        let (mesh, _) = load_path(&path).unwrap();
+    // Sampled (the default): each scene builds with one insertion mode, alternating, so the
+    // scenes between them cover both; in full (CI) every scene builds with both.
+    for (i, path) in shared_scenes().iter().enumerate() {
+        let (mesh, _) = load_path(path).unwrap();
         let tris = mesh.triangles();
-        let rays = mixed_rays(&mesh, &[], RAYS, 5);
-        check_scene(&path.file_name().unwrap().to_string_lossy(), &tris, &rays, false);
+        let rays = mixed_rays(&mesh, &[], matrix_rays(RAYS), 5);
+        let inserts = if full_matrices() { &InsertMode::ALL[..] } else { &InsertMode::ALL[i % 2..i % 2 + 1] };
+        check_scene(&path.file_name().unwrap().to_string_lossy(), &tris, &rays, false, inserts);
     }
 }
 
@@ -100,11 +100,11 @@ fn rays_from_inside_closed_meshes_never_escape() {
         let tris = g.mesh.triangles();
         let mut rays = Vec::new();
         for (i, p) in g.inside_points.iter().enumerate() {
-            rays.extend(inside_rays(&g.mesh, *p, 20_000 / g.inside_points.len() + 40, i as u64));
+            rays.extend(inside_rays(&g.mesh, *p, matrix_rays(20_000) / g.inside_points.len() + 40, i as u64));
         }
         for kind in GridKind::ALL {
             for res in [None, Some(Resolution::Cubic(3)), Some(Resolution::Cubic(200))] {
-                for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+                for insert in InsertMode::ALL {
                     let cfg = GridConfig {
                         kind,
                         resolution: res,

@@ -1,7 +1,5 @@
 //! Shared helpers: scenes, ray sets, the brute-force reference, the shared-scene folder.
 
-use std::path::PathBuf;
-
 use glam::Vec3;
 use gridrt_grid::{BatchStats, brute, trace::trace_batch};
 use gridrt_scene::procedural::{self, SceneKind};
@@ -9,23 +7,7 @@ use gridrt_scene::rays::{camera_rays, inside_rays, random_rays};
 use gridrt_scene::rng::Rng;
 use gridrt_scene::{Camera, Hit, Mesh, Ray};
 
-/// `../shared/scenes` next to the repository, when present; with
-/// `GRIDRT_REQUIRE_SHARED_SCENES=1` (CI) their absence fails the test.
-pub fn shared_scenes() -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
-    let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map(|rd| {
-            rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "glb")).collect()
-        })
-        .unwrap_or_default();
-    v.sort();
-    assert!(
-        !(v.is_empty() && std::env::var("GRIDRT_REQUIRE_SHARED_SCENES").is_ok_and(|x| x == "1")),
-        "GRIDRT_REQUIRE_SHARED_SCENES=1 but {} holds no .glb",
-        dir.display()
-    );
-    v
-}
+pub use gridrt_testkit::{full_matrices, matrix_rays, shared_scenes};
 
 /// Procedural test scenes small enough for a brute-force reference over 100k rays.
 pub fn procedural_scenes() -> Vec<(String, procedural::Generated)> {

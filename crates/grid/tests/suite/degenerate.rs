@@ -24,7 +24,7 @@ fn check(name: &str, tris: &[[Vec3; 3]], rays: usize, max_bytes_per_tri: f64) {
     let rays = rays_for(tris, rays);
     let (expected, _) = reference(tris, &rays);
     for kind in GridKind::ALL {
-        for insert in [InsertMode::BoundingBox, InsertMode::Exact] {
+        for insert in InsertMode::ALL {
             let cfg = GridConfig { kind, build: BuildOptions { insert, parallel: true }, ..GridConfig::default() };
             let (grid, report) = structure::build(tris, &cfg).unwrap_or_else(|e| panic!("{name} {kind}: {e}"));
             let per_tri = report.stats.memory_bytes as f64 / tris.len() as f64;

@@ -4,8 +4,8 @@
 use glam::{DVec3, UVec3, Vec3};
 use gridrt_grid::GridGeometry;
 use gridrt_grid::geometry::GridRay;
+use gridrt_grid::ray::PreparedRay;
 use gridrt_grid::traversal::{Traversal, Walker};
-use gridrt_grid::triangle::PreparedRay;
 use gridrt_scene::rng::Rng;
 use gridrt_scene::{Aabb, Ray};
 

@@ -1,7 +1,8 @@
 //! The watertight triangle test: hits are geometrically real, misses are real misses.
 
 use glam::{DVec3, Vec3};
-use gridrt_grid::triangle::{PreparedRay, intersect};
+use gridrt_grid::ray::PreparedRay;
+use gridrt_grid::triangle::intersect;
 use gridrt_scene::Ray;
 use gridrt_scene::rng::Rng;
 

@@ -141,24 +141,7 @@ fn embedded_default_scene_loads() {
 /// skin and morph-target validation accept what real exporters write.
 #[test]
 fn every_shared_scene_loads() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
-    let mut files: Vec<std::path::PathBuf> = ["", "animated"]
-        .iter()
-        .filter_map(|sub| std::fs::read_dir(dir.join(sub)).ok())
-        .flatten()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "glb" || x == "gltf"))
-        .collect();
-    files.sort();
-    if files.is_empty() {
-        assert!(
-            !std::env::var("GRIDRT_REQUIRE_SHARED_SCENES").is_ok_and(|x| x == "1"),
-            "GRIDRT_REQUIRE_SHARED_SCENES=1 but {} holds no scenes",
-            dir.display()
-        );
-        println!("../shared/scenes not present: nothing to do");
-        return;
-    }
+    let files = gridrt_testkit::shared_scenes_in(&["", "animated"], &["glb", "gltf"]);
     for f in &files {
         let (mesh, report) = load_path(f).unwrap_or_else(|e| panic!("{e}"));
         println!("{}: {} triangles", f.display(), mesh.triangle_count());

@@ -23,10 +23,10 @@ use gridrt_scene::{Camera, Hit, Ray};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::experiment::fig5::{FigScene, default_scenes, procedural_scenes};
-use super::experiment::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use super::experiment::sweep::{best_of, machine};
 use crate::cli::BenchArgs;
+use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
+use crate::lab::scenes::{LabScene, default_scenes, procedural_scenes};
+use crate::lab::sweep::{best_of, machine};
 
 /// One structure on one scene.
 #[derive(Clone, Debug, Serialize)]
@@ -110,7 +110,7 @@ pub fn agree(a: &Hit, b: &Hit) -> bool {
 
 /// The scenes: every scene of `--scenes`' manifest (default ../shared/scenes), or every
 /// .glb/.gltf in the folder without a manifest, or the procedural stand-ins.
-fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<FigScene>> {
+fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<LabScene>> {
     let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
     let Some(dir) = dir else { return Ok(procedural_scenes(args.quick)) };
     let manifest: Vec<serde_json::Value> = match std::fs::read_to_string(dir.join("manifest.json")) {
@@ -138,7 +138,7 @@ fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<FigScene>> {
             eprintln!("bench: skipping {file}: no triangles");
             continue;
         }
-        scenes.push(FigScene { name: file, kind, bounds: mesh.bounds(), tris });
+        scenes.push(LabScene { name: file, kind, bounds: mesh.bounds(), tris });
     }
     scenes.sort_by_key(|s| s.tris.len());
     if args.quick {
@@ -149,7 +149,7 @@ fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<FigScene>> {
 }
 
 /// The two ray sets of a scene.
-pub fn ray_sets(sc: &FigScene, count: usize) -> [(&'static str, Vec<Ray>); 2] {
+pub fn ray_sets(sc: &LabScene, count: usize) -> [(&'static str, Vec<Ray>); 2] {
     [
         ("primary", camera_rays(&Camera::fit(&sc.bounds, 4.0 / 3.0), count)),
         ("random", random_rays(&sc.bounds, count, 7)),
@@ -202,7 +202,7 @@ impl Built {
 
 /// Measures every subject on one scene.
 fn bench_scene(
-    sc: &FigScene,
+    sc: &LabScene,
     sets: &[(&'static str, Vec<Ray>); 2],
     args: &BenchArgs,
     cost: &CostModel,
@@ -305,7 +305,7 @@ pub struct AutoPoint {
 /// Sweeps the flat grid's resolution from half to twice the auto choice (factors 2^(k/4)) and
 /// times both ray sets on the CPU.
 fn auto_check(
-    sc: &FigScene,
+    sc: &LabScene,
     sets: &[(&'static str, Vec<Ray>); 2],
     args: &BenchArgs,
     cost: &CostModel,
@@ -352,7 +352,7 @@ fn auto_check(
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)?;
-    let (cost, cost_note) = super::experiment::cost_constants::active_cost_model();
+    let (cost, cost_note) = crate::config::active_cost_model();
     eprintln!("bench: auto resolution with {cost_note}");
     #[cfg(not(feature = "peers"))]
     eprintln!("bench: built without the `peers` feature: no bvh/obvhs rows");
@@ -446,7 +446,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn charts(args: &BenchArgs, scenes: &[FigScene], rows: &[Row], scale: &[scaling::ScalePoint]) -> anyhow::Result<()> {
+fn charts(args: &BenchArgs, scenes: &[LabScene], rows: &[Row], scale: &[scaling::ScalePoint]) -> anyhow::Result<()> {
     let names: Vec<String> = scenes.iter().map(|s| s.name.trim_end_matches(".glb").to_string()).collect();
     let structures: Vec<String> = {
         let mut v: Vec<String> = Vec::new();

@@ -12,8 +12,8 @@ use serde::Serialize;
 
 use super::Subject;
 use crate::cli::BenchArgs;
-use crate::commands::experiment::report::{Chart, Series, print_table, progress};
-use crate::commands::experiment::sweep::best_of;
+use crate::lab::report::{Chart, Series, print_table, progress};
+use crate::lab::sweep::best_of;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ScalePoint {

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::scaling::{ScalePoint, slope};
 use super::{AutoPoint, Row};
-use crate::commands::experiment::report::print_table;
+use crate::lab::report::print_table;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Target {

@@ -14,8 +14,8 @@ use gridrt_scene::rng::Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::cli::ExperimentArgs;
+use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {

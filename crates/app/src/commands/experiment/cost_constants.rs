@@ -9,26 +9,27 @@
 //! micro-benchmark (cells stepped through an empty grid, triangle tests against one
 //! triangle) is reported beside the fit.
 //!
-//! `--save` stores the CPU constants in the calibration file ([`calibration_path`]); the
+//! `--save` stores the CPU constants in the calibration file ([`crate::config::calibration_path`]); the
 //! command line's auto resolution then uses them instead of the survey's defaults.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::{UVec3, Vec3};
 use gridrt_gpu::Tracer;
 use gridrt_grid::geometry::GridRay;
+use gridrt_grid::ray::PreparedRay;
 use gridrt_grid::resolution::sample_curve;
 use gridrt_grid::traversal::{Traversal, Walker};
-use gridrt_grid::triangle::{PreparedRay, intersect};
+use gridrt_grid::triangle::intersect;
 use gridrt_grid::{CostModel, GridConfig, GridKind, InsertMode, Resolution};
 use gridrt_scene::rng::Rng;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use super::fig5::{mixed_rays, pick_scenes};
-use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use super::sweep::{Gpu, machine, measure_config, upload};
 use crate::cli::ExperimentArgs;
+use crate::config::{Calibration, Fit, calibration_path};
+use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
+use crate::lab::scenes::{mixed_rays, pick_scenes};
+use crate::lab::sweep::{Gpu, machine, measure_config, upload};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -38,66 +39,6 @@ pub struct Row {
     pub tests_per_ray: f64,
     pub cpu_ns_per_ray: f64,
     pub gpu_ns_per_ray: Option<f64>,
-}
-
-/// Fitted constants in nanoseconds per ray, and how well they fit.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Fit {
-    pub t_setup: f64,
-    pub t_step: f64,
-    pub t_inter: f64,
-    /// RMS of (predicted − measured) / measured.
-    pub rel_rms_error: f64,
-    pub r_squared: f64,
-    pub points: usize,
-}
-
-/// What the calibration file holds.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Calibration {
-    pub cpu: Fit,
-    pub gpu: Option<Fit>,
-    pub machine: String,
-    pub date: String,
-}
-
-/// Where `--save` writes the calibration and where the command line looks for it:
-/// `$GRIDRT_CALIBRATION`, else `$XDG_CONFIG_HOME/gridrt/cost-constants.json`, else
-/// `~/.config/gridrt/cost-constants.json`.
-pub fn calibration_path() -> Option<PathBuf> {
-    if let Some(p) = std::env::var_os("GRIDRT_CALIBRATION") {
-        return Some(PathBuf::from(p));
-    }
-    let base = std::env::var_os("XDG_CONFIG_HOME")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".config")))?;
-    Some(base.join("gridrt/cost-constants.json"))
-}
-
-/// The saved CPU constants, if a calibration file exists and is valid.
-/// The cost model the command line's auto resolution uses: the saved calibration's CPU
-/// constants when there is one, else the survey's; and a note saying which.
-pub fn active_cost_model() -> (CostModel, String) {
-    let mut m = CostModel::default();
-    match load_calibration() {
-        Some((path, c)) => {
-            (m.t_setup, m.t_step, m.t_inter) = (c.cpu.t_setup, c.cpu.t_step, c.cpu.t_inter);
-            (m, format!("calibrated constants from {}", path.display()))
-        }
-        None => (m, "the survey's constants (Tsetup 1.0, Tstep 0.1, Tinter 0.5)".into()),
-    }
-}
-
-pub fn load_calibration() -> Option<(PathBuf, Calibration)> {
-    let path = calibration_path()?;
-    let text = std::fs::read_to_string(&path).ok()?;
-    match serde_json::from_str::<Calibration>(&text) {
-        Ok(c) if c.cpu.t_step > 0.0 && c.cpu.t_inter > 0.0 && c.cpu.t_setup >= 0.0 => Some((path, c)),
-        _ => {
-            log::warn!("ignoring {}: not a valid gridrt calibration", path.display());
-            None
-        }
-    }
 }
 
 /// Solves the least-squares problem restricted to the coefficients in `active` (the others are

@@ -6,10 +6,10 @@ use gridrt_gpu::Tracer;
 use gridrt_grid::{GridConfig, GridKind};
 use serde::Serialize;
 
-use super::fig5::{mixed_rays, pick_scenes};
-use super::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use super::sweep::{Gpu, machine, measure_config, upload};
 use crate::cli::ExperimentArgs;
+use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
+use crate::lab::scenes::{mixed_rays, pick_scenes};
+use crate::lab::sweep::{Gpu, machine, measure_config, upload};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {

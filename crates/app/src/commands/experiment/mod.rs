@@ -7,8 +7,6 @@ pub mod cost_constants;
 pub mod fig5;
 pub mod hierarchy;
 pub mod models;
-pub mod report;
-pub mod sweep;
 
 use crate::cli::{ExperimentArgs, ExperimentName};
 

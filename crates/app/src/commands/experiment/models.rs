@@ -14,9 +14,9 @@ use gridrt_scene::procedural;
 use gridrt_scene::rays::random_rays;
 use serde::Serialize;
 
-use super::report::{Chart, Series, fit_line, print_table, progress, save_chart, write_rows};
-use super::sweep::{Point, measure};
 use crate::cli::ExperimentArgs;
+use crate::lab::report::{Chart, Series, fit_line, print_table, progress, save_chart, write_rows};
+use crate::lab::sweep::{Point, measure};
 
 /// Largest reference count a sweep point may have (2²⁷: 512 MiB of references).
 const REF_BUDGET: u64 = 1 << 27;

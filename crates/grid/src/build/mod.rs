@@ -1,0 +1,65 @@
+//! What every structure's build shares: options, phase timings, the reference and cell limits,
+//! fallible allocation, and the bucketing of triangles into a grid's cells (count → prefix sum
+//! → scatter, survey Algorithm 1), serial in [`bucket`] and parallel in [`parallel`].
+
+pub mod bucket;
+#[cfg(feature = "parallel")]
+pub mod parallel;
+
+// std::time::Instant panics on wasm32-unknown-unknown; web-time is std's Instant elsewhere.
+use web_time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::BuildError;
+use crate::insert::InsertMode;
+
+/// Largest number of references a grid may hold (u32 offsets; keeps memory bounded).
+pub const MAX_REFS: u64 = 1 << 31;
+
+/// How a grid is built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct BuildOptions {
+    pub insert: InsertMode,
+    /// Use all threads (rayon); the result is identical to the serial build.
+    pub parallel: bool,
+}
+
+/// Milliseconds per build phase, in execution order.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PhaseTimes(pub Vec<(String, f64)>);
+
+impl PhaseTimes {
+    pub fn record<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let r = f();
+        self.record_since(name, start);
+        r
+    }
+    /// Records the phase `name` as started at `start` and ended now.
+    pub fn record_since(&mut self, name: &str, start: Instant) {
+        self.0.push((name.to_string(), start.elapsed().as_secs_f64() * 1e3));
+    }
+    pub fn total(&self) -> f64 {
+        self.0.iter().map(|p| p.1).sum()
+    }
+}
+
+/// A vector of `n` default values, or [`BuildError::OutOfMemory`] when the allocator refuses
+/// (an address-space limit) instead of aborting the process.
+pub fn zeroed<T: Copy + Default>(n: usize, what: &'static str) -> Result<Vec<T>, BuildError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
+    v.resize(n, T::default());
+    Ok(v)
+}
+
+/// Refuses a grid of resolution `res` with more than `limit` cells, before anything is allocated.
+pub fn check_cells(res: [u32; 3], limit: u64) -> Result<(), BuildError> {
+    let cells = res.iter().map(|&r| r as u64).product::<u64>();
+    if cells > limit {
+        return Err(BuildError::TooManyCells { cells, limit });
+    }
+    Ok(())
+}

@@ -1,0 +1,132 @@
+//! The parallel bucketing of a flat grid: the grid is split into slabs of z layers (contiguous
+//! ranges of cells, so of `cell_start` and `refs` too); triangles are binned by the slabs they
+//! touch, in increasing order, and each slab counts and scatters its own cells without atomics.
+//! The output is therefore bit-identical to the serial [`super::bucket::bucket`], with no sort.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::{MAX_REFS, PhaseTimes, zeroed};
+use crate::BuildError;
+use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
+use crate::insert::{InsertMode, for_each_cell_in_layers, prepare};
+
+/// In-place inclusive prefix sum of `counts` in two parallel passes (chunk sums, then each
+/// chunk's running sum from its offset); returns the total.
+fn par_inclusive_scan(counts: &mut [u32]) -> Result<u64, BuildError> {
+    const CHUNK: usize = 1 << 16;
+    let sums: Vec<u64> = counts.par_chunks(CHUNK).map(|c| c.iter().map(|&x| x as u64).sum()).collect();
+    let mut offsets = Vec::with_capacity(sums.len());
+    let mut total = 0u64;
+    for s in sums {
+        offsets.push(total);
+        total += s;
+    }
+    if total > MAX_REFS {
+        return Err(BuildError::TooManyReferences { refs: total, limit: MAX_REFS });
+    }
+    counts.par_chunks_mut(CHUNK).zip(offsets).for_each(|(c, offset)| {
+        // Fits: every partial sum is at most `total` ≤ MAX_REFS < 2³².
+        let mut acc = offset as u32;
+        for x in c {
+            acc += *x;
+            *x = acc;
+        }
+    });
+    Ok(total)
+}
+
+/// Splits `v` into consecutive mutable pieces of the given lengths.
+fn split_lengths<T>(mut v: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut out = Vec::new();
+    for len in lengths {
+        let (a, b) = std::mem::take(&mut v).split_at_mut(len);
+        out.push(a);
+        v = b;
+    }
+    out
+}
+
+/// [`super::bucket::bucket`] over all of `tris` on all threads, with the same output.
+pub fn bucket(
+    tris: &[[Vec3; 3]],
+    geom: &GridGeometry,
+    mode: InsertMode,
+    times: &mut PhaseTimes,
+) -> Result<(Vec<u32>, Vec<u32>), BuildError> {
+    let geom = *geom;
+    let cells = geom.cell_count() as usize;
+    let layer = geom.res.x as usize * geom.res.y as usize;
+    let nz = geom.res.z;
+    // Several slabs per thread so that work stealing evens out dense and sparse slabs.
+    let slabs = (rayon::current_num_threads() * 2).clamp(1, nz as usize);
+    let edge: Vec<u32> = (0..=slabs).map(|s| (s as u64 * nz as u64 / slabs as u64) as u32).collect();
+    // Each triangle's z layers; a slab visits the triangles whose layers meet it, in
+    // increasing order.
+    let (span, box_refs): (Vec<[u32; 2]>, Vec<u64>) = times.record("bin", || {
+        tris.par_iter()
+            .map(|t| {
+                let g = prepare(&geom, t, INSERT_MARGIN_CELLS);
+                let e = g.hi - g.lo + glam::UVec3::ONE;
+                ([g.lo.z, g.hi.z], e.x as u64 * e.y as u64 * e.z as u64)
+            })
+            .unzip()
+    });
+    // The bounding boxes' cells bound the references from above (exactly, for box
+    // insertion): a grid far over the limit is refused before its cells are visited one by
+    // one (a fine grid over long slivers would otherwise take minutes to fail).
+    let upper: u64 = box_refs.par_iter().sum();
+    drop(box_refs);
+    if mode == InsertMode::BoundingBox && upper > MAX_REFS {
+        return Err(BuildError::TooManyReferences { refs: upper, limit: MAX_REFS });
+    }
+    let in_slab = |s: usize| {
+        let (z0, z1) = (edge[s], edge[s + 1]);
+        span.iter().enumerate().filter(move |(_, z)| z[0] < z1 && z[1] >= z0).map(|(i, _)| i as u32)
+    };
+    let slab_cells = |s: usize| (edge[s + 1] - edge[s]) as usize * layer;
+    // `offsets` becomes `cell_start` in place (Lagae & Dutré): counts, then their inclusive
+    // prefix sum (each cell's end), then the scatter decrements each cell's end once per
+    // reference, filling the cell backwards, so each entry ends at its cell's start. No
+    // cursor array, no second M-sized allocation.
+    let mut offsets = zeroed::<u32>(cells + 1, "the cell table")?;
+    times.record("count", || {
+        split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells)).into_par_iter().enumerate().for_each(
+            |(s, part)| {
+                let base = edge[s] as usize * layer;
+                for i in in_slab(s) {
+                    let g = prepare(&geom, &tris[i as usize], INSERT_MARGIN_CELLS);
+                    for_each_cell_in_layers(&geom, &g, mode, edge[s]..edge[s + 1], |c| part[c - base] += 1);
+                }
+            },
+        )
+    });
+    let total = times.record("scan", || par_inclusive_scan(&mut offsets[..cells]))?;
+    offsets[cells] = total as u32;
+    let mut refs = zeroed::<u32>(total as usize, "triangle references")?;
+    times.record("scatter", || {
+        // A slab's references start where the cell before it ends.
+        let slab_start = |s: usize| {
+            let base = edge[s] as usize * layer;
+            if base == 0 { 0 } else { offsets[base - 1] as usize }
+        };
+        let ref_bounds: Vec<usize> =
+            (0..=slabs).map(|s| if s == slabs { total as usize } else { slab_start(s) }).collect();
+        let ref_parts = split_lengths(&mut refs, ref_bounds.windows(2).map(|w| w[1] - w[0]));
+        let end_parts = split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells));
+        ref_parts.into_par_iter().zip(end_parts).enumerate().for_each(|(s, (out, end))| {
+            let base = edge[s] as usize * layer;
+            let ref_base = ref_bounds[s] as u32;
+            // Backwards, so that each cell, filled from its end, holds increasing indices.
+            for i in in_slab(s).rev() {
+                let g = prepare(&geom, &tris[i as usize], INSERT_MARGIN_CELLS);
+                for_each_cell_in_layers(&geom, &g, mode, edge[s]..edge[s + 1], |c| {
+                    let e = &mut end[c - base];
+                    *e -= 1;
+                    out[(*e - ref_base) as usize] = i;
+                });
+            }
+        });
+    });
+    Ok((offsets, refs))
+}

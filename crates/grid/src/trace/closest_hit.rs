@@ -1,0 +1,90 @@
+//! The closest-hit rule, written once for every structure (the WGSL twin is
+//! `shaders/shared/closest_hit.wgsl`).
+//!
+//! A structure walks its cells in order of increasing `t` and hands each leaf's triangle
+//! references to [`ClosestHit::test_cell`]. Every triangle of the cell is tested (unless
+//! mailboxed) and the best hit so far is kept by (t, triangle index). The walk stops at the
+//! first cell whose exit `t` is strictly greater than the best hit's `t`: the hit is accepted
+//! only once its `t` lies within a visited cell's range. A hit found beyond the current cell
+//! stays a candidate instead of being thrown away (so the mailbox can never hide it); a
+//! triangle with an equal or smaller `t` must overlap a cell up to the current one, thanks to
+//! the conservative insertion margin (see [`crate::geometry`]), so it has been tested by then.
+//! The result is bit-identical to [`crate::brute::trace`].
+
+use glam::Vec3;
+use gridrt_scene::{Hit, Ray};
+
+use crate::mailbox::Mailbox;
+use crate::ray::PreparedRay;
+use crate::stats::RayStats;
+use crate::triangle::{closer, intersect};
+
+/// One ray's search: the best hit so far, its stats and its mailbox.
+#[derive(Debug)]
+pub struct ClosestHit<'a> {
+    tris: &'a [[Vec3; 3]],
+    /// The ray, prepared for the watertight triangle test.
+    pub ray: PreparedRay,
+    best: Hit,
+    stats: RayStats,
+    mailbox: Option<Mailbox>,
+}
+
+impl<'a> ClosestHit<'a> {
+    /// Counts one visited cell (a leaf, an internal cell or a skipped block).
+    #[inline]
+    pub fn visit_cell(&mut self) {
+        self.stats.cells += 1;
+    }
+
+    /// Tests the triangles `refs` of a leaf the ray leaves at `t_exit` (skipping mailboxed
+    /// ones), keeping the closest hit by (t, index). True when the search is done: the best hit
+    /// lies before `t_exit`, so no later cell can hold a closer one.
+    #[inline]
+    pub fn test_cell(&mut self, refs: &[u32], t_exit: f32) -> bool {
+        for &tri in refs {
+            if let Some(mb) = self.mailbox.as_mut()
+                && mb.check_and_insert(tri)
+            {
+                continue;
+            }
+            self.stats.tests += 1;
+            if let Some(h) = intersect(&self.ray, &self.tris[tri as usize])
+                && closer(h.t, tri, self.best.t, self.best.triangle)
+            {
+                self.best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
+            }
+        }
+        self.done_at(t_exit)
+    }
+
+    /// True when the best hit lies before `t_exit` (the end of a cell or block just crossed).
+    #[inline]
+    pub fn done_at(&self, t_exit: f32) -> bool {
+        self.best.t < t_exit
+    }
+}
+
+/// The closest hit of `ray` among `tris` (the triangles the structure was built from): `walk`
+/// visits the structure's cells in order and returns when [`ClosestHit::test_cell`] says the
+/// search is done or the cells run out.
+#[inline]
+pub fn closest_hit(
+    tris: &[[Vec3; 3]],
+    ray: &Ray,
+    mailbox: bool,
+    walk: impl FnOnce(&mut ClosestHit),
+) -> (Hit, RayStats) {
+    let Some(pr) = PreparedRay::new(ray) else {
+        return (Hit::MISS, RayStats::default());
+    };
+    let mut search = ClosestHit {
+        tris,
+        ray: pr,
+        best: Hit::MISS,
+        stats: RayStats::default(),
+        mailbox: mailbox.then(Mailbox::default),
+    };
+    walk(&mut search);
+    (search.best, search.stats)
+}
