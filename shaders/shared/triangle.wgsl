@@ -63,40 +63,12 @@ fn intersect_triangle(r: PreparedRay, tri: u32) -> TriHit {
 }
 
 // Deterministic order: smaller t, then smaller triangle index.
-fn closer(t: f32, tri: u32, best: Hit) -> bool {
-    return t < best.t || (t == best.t && tri < best.triangle);
+fn closer(t: f32, tri: u32, b: Hit) -> bool {
+    return t < b.t || (t == b.t && tri < b.triangle);
 }
 
 // Hashed per-ray mailbox (crates/grid/src/mailbox.rs): 16 direct-mapped entries.
 const MAILBOX_SIZE: u32 = 16u;
-
-// Tests one referenced triangle against the ray, updating best/stats/mailbox.
-fn test_triangle(r: PreparedRay, tri: u32, best: ptr<function, Hit>, stats: ptr<function, RayStats>,
-                 mailbox: ptr<function, array<u32, 16>>, use_mailbox: bool) {
-    if use_mailbox {
-        let slot = tri & (MAILBOX_SIZE - 1u);
-        if (*mailbox)[slot] == tri {
-            return;
-        }
-        (*mailbox)[slot] = tri;
-    }
-    (*stats).tests += 1u;
-    let h = intersect_triangle(r, tri);
-    if h.hit && closer(h.t, tri, *best) {
-        (*best).t = h.t;
-        (*best).triangle = tri;
-        (*best).u = h.u;
-        (*best).v = h.v;
-    }
-}
-
-// Tests refs[first .. end] (one cell's triangles). CPU port: crates/grid/src/trace.rs `test_refs`.
-fn test_refs(r: PreparedRay, first: u32, end: u32, best: ptr<function, Hit>, stats: ptr<function, RayStats>,
-             mailbox: ptr<function, array<u32, 16>>, use_mailbox: bool) {
-    for (var k = first; k < end; k++) {
-        test_triangle(r, refs[k], best, stats, mailbox, use_mailbox);
-    }
-}
 
 fn miss() -> Hit {
     return Hit(inf(), NO_HIT, 0.0, 0.0);

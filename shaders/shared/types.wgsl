@@ -36,16 +36,22 @@ fn unpack_triangle(p: vec4<f32>, q: vec4<f32>, r: f32) -> Vertices {
     return Vertices(p.xyz, vec3<f32>(p.w, q.x, q.y), vec3<f32>(q.z, q.w, r));
 }
 
-// Per-dispatch parameters. Mirrors `GridParams`.
+// Per-dispatch parameters of a trace kernel. Mirrors `GridParams`.
 struct Params {
     // xyz: grid box minimum (world units).
     grid_min: vec4<f32>,
     // xyz: 1 / cell size.
     inv_cell: vec4<f32>,
-    // xyz: resolution of the flat / fine / top grid; w: number of rays in this dispatch.
-    res: vec4<u32>,
-    // x: traversal (0 Amanatides-Woo, 1 Cleary-Wyvill, 2 Liu); y: mailbox (0/1);
-    // z: macrocell edge A (macrocell kernel); w: first ray of this dispatch.
-    options: vec4<u32>,
+    // Resolution of the flat / fine / top grid.
+    res: vec3<u32>,
+    // Rays in this dispatch.
+    ray_count: u32,
+    // 1: skip triangles already tested by this ray (the mailbox).
+    mailbox: u32,
+    // Fine cells per macrocell edge (the macrocell kernel).
+    macro_edge: u32,
+    // Index of this dispatch's first ray in the whole ray set.
+    first_ray: u32,
+    pad: u32,
 }
 

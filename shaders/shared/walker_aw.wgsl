@@ -3,8 +3,6 @@
 // from the integer wall index (no drift, no FMA contraction).
 // CPU port (same names, same arithmetic): crates/grid/src/traversal/amanatides_woo.rs.
 
-const TRAVERSAL: u32 = WALK_AW;
-
 struct Walker {
     done: bool,
     g: GridRay,
@@ -28,7 +26,7 @@ fn argmin3f(v: vec3<f32>) -> u32 {
     return 2u;
 }
 
-fn walker_init(kind: u32, g: GridRay, res_u: vec3<u32>) -> Walker {
+fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     var w: Walker;
     w.done = false;
     w.g = g;

@@ -5,10 +5,6 @@
 // walker stays in registers, which matters most on the hierarchy stack (one walker per level).
 // Naive Bresenham is CPU-only (it is incomplete by design).
 
-const WALK_AW: u32 = 0u;
-const WALK_CW: u32 = 1u;
-const WALK_LIU: u32 = 2u;
-
 fn sign_step(x: f32) -> i32 {
     if x > 0.0 {
         return 1;

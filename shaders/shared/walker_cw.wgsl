@@ -3,7 +3,6 @@
 // segment, advanced by integer increments.
 // CPU port (same names, same arithmetic): crates/grid/src/traversal/cleary_wyvill.rs.
 
-const TRAVERSAL: u32 = WALK_CW;
 const CW_SCALE: u32 = 1073741824u; // 2^30
 const CW_BEYOND: u32 = 1073741825u;
 
@@ -41,7 +40,7 @@ fn cw_to_fixed(x: f32) -> u32 {
     return 0u;
 }
 
-fn walker_init(kind: u32, g: GridRay, res_u: vec3<u32>) -> Walker {
+fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     var w: Walker;
     w.done = false;
     w.g = g;

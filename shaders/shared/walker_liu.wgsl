@@ -3,7 +3,6 @@
 // the cells of each slice queued in order (exact 64-bit wall comparisons).
 // CPU port (same names, same arithmetic): crates/grid/src/traversal/liu.rs.
 
-const TRAVERSAL: u32 = WALK_LIU;
 const LIU_FRAC_BITS: u32 = 20u;
 const LIU_ONE: f32 = 1048576.0;
 const LIU_QUEUE: u32 = 8u;
@@ -166,7 +165,7 @@ fn liu_next_slice(w: ptr<function, Walker>) -> bool {
     return true;
 }
 
-fn walker_init(kind: u32, g: GridRay, res_u: vec3<u32>) -> Walker {
+fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     var w: Walker;
     w.done = false;
     w.g = g;

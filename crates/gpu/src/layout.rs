@@ -39,10 +39,17 @@ pub struct GridParams {
     pub grid_min: [f32; 4],
     /// xyz: 1 / cell size.
     pub inv_cell: [f32; 4],
-    /// xyz: resolution; w: rays in this dispatch.
-    pub res: [u32; 4],
-    /// x: traversal (0 AW, 1 CW, 2 Liu); y: mailbox; z: macrocell edge; w: first ray.
-    pub options: [u32; 4],
+    /// Resolution of the flat / fine / top grid.
+    pub res: [u32; 3],
+    /// Rays in this dispatch.
+    pub ray_count: u32,
+    /// 1: skip triangles already tested by this ray (the mailbox).
+    pub mailbox: u32,
+    /// Fine cells per macrocell edge (the macrocell kernel).
+    pub macro_edge: u32,
+    /// Index of this dispatch's first ray in the whole ray set.
+    pub first_ray: u32,
+    pub pad: u32,
 }
 
 /// One grid of a hierarchy: xyz = resolution, w = first cell. WGSL `Node`.

@@ -2,11 +2,12 @@
 //! only crate of the workspace that depends on wgpu.
 //!
 //! Data flows one way: a built structure ([`gridrt_grid::AnyGrid`]) → GPU buffers
-//! ([`upload`]) → a trace kernel per structure (`shaders/<kind>.wgsl`, [`trace`]) → hits and
+//! ([`upload`]) → a trace kernel per structure ([`kernel`], `shaders/<kernel>.wgsl`, [`trace`]) → hits and
 //! per-ray stats; the render pass ([`render`]) adds camera rays, shadow rays and shading.
 
 pub mod context;
 pub mod cpu;
+pub mod kernel;
 pub mod layout;
 pub mod render;
 pub mod shaders;
@@ -14,5 +15,6 @@ pub mod trace;
 pub mod upload;
 
 pub use context::{GpuContext, GpuError};
+pub use kernel::{GpuWalker, Kernel};
 pub use render::{Frame, FrameTarget, RenderOptions, Renderer, View};
 pub use trace::Tracer;

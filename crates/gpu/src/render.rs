@@ -16,8 +16,9 @@ use gridrt_scene::{Aabb, Camera, Hit};
 
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
+use crate::kernel::GpuWalker;
 use crate::layout::{FrameTotals, GpuHit, GpuRayStats, GridParams, ShadeParams};
-use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, traversal_code};
+use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back};
 use crate::upload::{GpuScene, GpuStructure};
 
 /// What the image shows (`--view`).
@@ -310,7 +311,7 @@ impl Renderer {
                 t.capacity
             )));
         }
-        let code = traversal_code(o.traversal)?;
+        let walker = GpuWalker::for_traversal(o.traversal)?;
         let dev = &ctx.device;
         let q = &ctx.queue;
         let cam = gpu_camera(&o.camera, o.width, o.height);
@@ -318,9 +319,7 @@ impl Renderer {
         let mut sp = shade_params(bounds, o);
         sp.tile = [first, count, 0, 0];
         q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&sp));
-        let mut tp: GridParams = s.params;
-        tp.res[3] = count;
-        tp.options = [code, o.mailbox as u32, s.params.options[2], first];
+        let tp = GridParams { ray_count: count, mailbox: o.mailbox as u32, first_ray: first, ..s.params };
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
 
         let groups = count.div_ceil(WORKGROUP);
@@ -353,7 +352,7 @@ impl Renderer {
             stats: &t.stats,
             first: 0,
             count,
-            traversal: code,
+            walker,
         };
         self.tracer.encode(ctx, enc, scene, s, &primary)?;
         if o.view == View::Shaded {
@@ -370,7 +369,7 @@ impl Renderer {
                 stats: &t.shadow_stats,
                 first: 0,
                 count,
-                traversal: code,
+                walker,
             };
             self.tracer.encode(ctx, enc, scene, s, &shadow)?;
         }

@@ -4,12 +4,13 @@
 //! `{TRAVERSAL}` stands for the walker the module is composed with (`aw`, `cw` or `liu`): each
 //! trace pipeline carries only its own walker's code and state.
 
+use crate::kernel::GpuWalker;
+
 /// Every WGSL file under `shaders/`, by its path relative to that folder.
 pub const SOURCES: &[(&str, &str)] = &[
     ("flat.wgsl", include_str!("../../../shaders/flat.wgsl")),
     ("macrocell.wgsl", include_str!("../../../shaders/macrocell.wgsl")),
-    ("multires.wgsl", include_str!("../../../shaders/multires.wgsl")),
-    ("twolevel.wgsl", include_str!("../../../shaders/twolevel.wgsl")),
+    ("hierarchy.wgsl", include_str!("../../../shaders/hierarchy.wgsl")),
     ("proximity.wgsl", include_str!("../../../shaders/proximity.wgsl")),
     ("camera.wgsl", include_str!("../../../shaders/camera.wgsl")),
     ("shadow.wgsl", include_str!("../../../shaders/shadow.wgsl")),
@@ -23,8 +24,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/walker_aw.wgsl", include_str!("../../../shaders/shared/walker_aw.wgsl")),
     ("shared/walker_cw.wgsl", include_str!("../../../shaders/shared/walker_cw.wgsl")),
     ("shared/walker_liu.wgsl", include_str!("../../../shaders/shared/walker_liu.wgsl")),
-    ("shared/trace_common.wgsl", include_str!("../../../shaders/shared/trace_common.wgsl")),
-    ("shared/hierarchy.wgsl", include_str!("../../../shaders/shared/hierarchy.wgsl")),
+    ("shared/closest_hit.wgsl", include_str!("../../../shaders/shared/closest_hit.wgsl")),
     ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
 ];
 
@@ -40,26 +40,20 @@ pub fn source(name: &str) -> Option<&'static str> {
     SOURCES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
 }
 
-/// The walker variants `{TRAVERSAL}` can stand for.
-pub const WALKERS: [&str; 3] = ["aw", "cw", "liu"];
-
 /// The composed module for `name` (e.g. `"flat.wgsl"`) with the Amanatides–Woo walker.
 pub fn compose(name: &str) -> Result<String, ComposeError> {
-    compose_with(name, "aw")
+    compose_with(name, GpuWalker::default())
 }
 
-/// The composed module for `name` with the walker `walker` (one of [`WALKERS`]).
-pub fn compose_with(name: &str, walker: &str) -> Result<String, ComposeError> {
-    if !WALKERS.contains(&walker) {
-        return Err(ComposeError { file: name.into(), detail: format!("unknown walker \"{walker}\"") });
-    }
+/// The composed module for `name` with `walker` standing for `{TRAVERSAL}`.
+pub fn compose_with(name: &str, walker: GpuWalker) -> Result<String, ComposeError> {
     let mut out = String::new();
     let mut seen = Vec::new();
     compose_into(name, walker, &mut out, &mut seen)?;
     Ok(out)
 }
 
-fn compose_into(name: &str, walker: &str, out: &mut String, seen: &mut Vec<String>) -> Result<(), ComposeError> {
+fn compose_into(name: &str, walker: GpuWalker, out: &mut String, seen: &mut Vec<String>) -> Result<(), ComposeError> {
     if seen.iter().any(|s| s == name) {
         return Ok(());
     }
@@ -67,7 +61,7 @@ fn compose_into(name: &str, walker: &str, out: &mut String, seen: &mut Vec<Strin
     let src = source(name).ok_or_else(|| ComposeError { file: name.into(), detail: "no such shader".into() })?;
     for line in src.lines() {
         if let Some(inc) = line.trim().strip_prefix("//!include ") {
-            let inc = inc.trim().replace("{TRAVERSAL}", walker);
+            let inc = inc.trim().replace("{TRAVERSAL}", walker.name());
             compose_into(&inc, walker, out, seen)
                 .map_err(|e| ComposeError { file: name.into(), detail: format!("including {inc}: {e}") })?;
         } else {

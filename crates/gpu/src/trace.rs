@@ -5,11 +5,12 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use gridrt_grid::{GridKind, Traversal};
+use gridrt_grid::Traversal;
 use gridrt_scene::{Hit, Ray};
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
+use crate::kernel::{GpuWalker, Kernel};
 use crate::layout::{GpuRay, GpuRayStats, GridParams};
 use crate::shaders::compose_with;
 use crate::upload::{GpuScene, GpuStructure};
@@ -17,40 +18,17 @@ use crate::upload::{GpuScene, GpuStructure};
 /// Threads per workgroup of every kernel (`@workgroup_size(64)`).
 pub const WORKGROUP: u32 = 64;
 
-/// Shader file and entry point of a kind's trace kernel.
-pub fn kernel(kind: GridKind) -> (&'static str, &'static str) {
-    match kind {
-        GridKind::Flat => ("flat.wgsl", "trace_flat"),
-        GridKind::Macrocell => ("macrocell.wgsl", "trace_macrocell"),
-        GridKind::Multires => ("multires.wgsl", "trace_multires"),
-        GridKind::TwoLevel => ("twolevel.wgsl", "trace_twolevel"),
-        GridKind::Proximity => ("proximity.wgsl", "trace_proximity"),
-    }
-}
-
-/// Traversal code the kernels understand (Bresenham is CPU-only).
-pub fn traversal_code(t: Traversal) -> Result<u32, GpuError> {
-    match t {
-        Traversal::AmanatidesWoo => Ok(0),
-        Traversal::ClearyWyvill => Ok(1),
-        Traversal::Liu => Ok(2),
-        Traversal::Bresenham => {
-            Err(GpuError::Unsupported("naive Bresenham has no GPU kernel (it is incomplete by design)".into()))
-        }
-    }
-}
-
 /// Creates a compute pipeline for `entry` in the composed shader `file` (auto layout).
 pub(crate) fn pipeline(ctx: &GpuContext, file: &str, entry: &str) -> Result<wgpu::ComputePipeline, GpuError> {
-    pipeline_walking(ctx, file, entry, "aw")
+    pipeline_walking(ctx, file, entry, GpuWalker::default())
 }
 
-/// [`pipeline`] composed with the walker `walker` (`aw`, `cw` or `liu`).
+/// [`pipeline`] composed with `walker`.
 pub(crate) fn pipeline_walking(
     ctx: &GpuContext,
     file: &str,
     entry: &str,
-    walker: &str,
+    walker: GpuWalker,
 ) -> Result<wgpu::ComputePipeline, GpuError> {
     let src = compose_with(file, walker)?;
     let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -74,7 +52,7 @@ const _: () = assert!(std::mem::size_of::<Hit>() == std::mem::size_of::<crate::l
 /// kept between calls.
 #[derive(Debug, Default)]
 pub struct Tracer {
-    pipelines: Mutex<HashMap<(GridKind, u32), wgpu::ComputePipeline>>,
+    pipelines: Mutex<HashMap<(Kernel, GpuWalker), wgpu::ComputePipeline>>,
     scratch: Mutex<Option<Scratch>>,
 }
 
@@ -132,8 +110,8 @@ pub struct TraceBuffers<'a> {
     pub first: u32,
     /// Rays in the dispatch.
     pub count: u32,
-    /// Traversal code ([`traversal_code`]); `params` carries the same in `options.x`.
-    pub traversal: u32,
+    /// The walker the kernel is composed with.
+    pub walker: GpuWalker,
 }
 
 impl Tracer {
@@ -141,15 +119,14 @@ impl Tracer {
         Tracer::default()
     }
 
-    /// The pipeline for `kind` walking with traversal `code` (an override constant).
-    fn pipeline(&self, ctx: &GpuContext, kind: GridKind, code: u32) -> Result<wgpu::ComputePipeline, GpuError> {
+    /// The pipeline of `kernel` composed with `walker`.
+    fn pipeline(&self, ctx: &GpuContext, kernel: Kernel, walker: GpuWalker) -> Result<wgpu::ComputePipeline, GpuError> {
         let mut map = self.pipelines.lock().expect("tracer lock");
-        if let Some(p) = map.get(&(kind, code)) {
+        if let Some(p) = map.get(&(kernel, walker)) {
             return Ok(p.clone());
         }
-        let (file, entry) = kernel(kind);
-        let p = pipeline_walking(ctx, file, entry, crate::shaders::WALKERS[code as usize])?;
-        map.insert((kind, code), p.clone());
+        let p = pipeline_walking(ctx, kernel.file(), kernel.entry(), walker)?;
+        map.insert((kernel, walker), p.clone());
         Ok(p)
     }
 
@@ -162,7 +139,7 @@ impl Tracer {
         s: &GpuStructure,
         b: &TraceBuffers,
     ) -> Result<(), GpuError> {
-        let pipe = self.pipeline(ctx, s.kind, b.traversal)?;
+        let pipe = self.pipeline(ctx, Kernel::for_kind(s.kind), b.walker)?;
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: range(b.rays, b.first, b.count, 32) },
@@ -202,14 +179,14 @@ impl Tracer {
         let max_by_binding = limits.max_storage_buffer_binding_size / std::mem::size_of::<GpuRay>() as u64;
         let max_by_dispatch = limits.max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64;
         let chunk = (1u64 << 20).min(max_by_binding).min(max_by_dispatch).max(1) as usize;
-        let code = traversal_code(traversal)?;
+        let walker = GpuWalker::for_traversal(traversal)?;
         let n = chunk.min(rays.len().max(1));
         let mut scratch = self.scratch.lock().expect("tracer scratch lock");
         if scratch.as_ref().is_none_or(|b| b.capacity < n) {
             *scratch = Some(Scratch::new(ctx, n));
         }
         let b = scratch.as_ref().expect("scratch buffers were just made");
-        let out = self.trace_chunks(ctx, scene, s, rays, chunk, [code, mailbox as u32], b);
+        let out = self.trace_chunks(ctx, scene, s, rays, chunk, (walker, mailbox), b);
         if out.is_err() {
             // A failed readback may leave a buffer mapped: the next call starts afresh.
             *scratch = None;
@@ -217,8 +194,7 @@ impl Tracer {
         out
     }
 
-    /// [`Tracer::trace`]'s chunk loop over `b`: `chunk` rays per dispatch, `options` =
-    /// [traversal code, mailbox].
+    /// [`Tracer::trace`]'s chunk loop over `b`: `chunk` rays per dispatch.
     #[allow(clippy::too_many_arguments)]
     fn trace_chunks(
         &self,
@@ -227,16 +203,15 @@ impl Tracer {
         s: &GpuStructure,
         rays: &[Ray],
         chunk: usize,
-        [code, mailbox]: [u32; 2],
+        (walker, mailbox): (GpuWalker, bool),
         b: &Scratch,
     ) -> Result<(Vec<Hit>, Vec<GpuRayStats>), GpuError> {
         let mut hits = Vec::with_capacity(rays.len());
         let mut stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
             let count = part.len() as u32;
-            let mut p = s.params;
-            p.res[3] = count;
-            p.options = [code, mailbox, s.params.options[2], (ci * chunk) as u32];
+            let p =
+                GridParams { ray_count: count, mailbox: mailbox as u32, first_ray: (ci * chunk) as u32, ..s.params };
             ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
             ctx.queue.write_buffer(&b.rays, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
@@ -247,7 +222,7 @@ impl Tracer {
                 stats: &b.stats,
                 first: 0,
                 count,
-                traversal: code,
+                walker,
             };
             self.encode(ctx, &mut enc, scene, s, &tb)?;
             let (hit_bytes, stat_bytes) = (count as u64 * 16, count as u64 * 8);

@@ -54,7 +54,8 @@ pub fn pack_triangle(t: &[Vec3; 3]) -> [[f32; 4]; 3] {
 #[derive(Debug)]
 pub struct GpuStructure {
     pub kind: GridKind,
-    /// Grid box, cell size and resolution; ray count and options are filled per dispatch.
+    /// Grid box, cell size, resolution and macrocell edge; the ray range and the mailbox are
+    /// filled per dispatch.
     pub params: GridParams,
     pub refs: wgpu::Buffer,
     /// `cell_start` (flat, macrocell, proximity) or the hierarchy's `cells`.
@@ -70,14 +71,14 @@ impl GpuStructure {
         let mut params = GridParams {
             grid_min: g.min.extend(0.0).to_array(),
             inv_cell: g.inv_cell.extend(0.0).to_array(),
-            res: [g.res.x, g.res.y, g.res.z, 0],
-            options: [0; 4],
+            res: g.res.to_array(),
+            ..GridParams::default()
         };
         let none = wgpu::BufferUsages::empty();
         let (refs, cells, extra): (&[u32], &[u8], Option<Vec<u8>>) = match grid {
             AnyGrid::Flat(f) => (&f.refs, bytemuck::cast_slice(&f.cell_start), None),
             AnyGrid::Macrocell(m) => {
-                params.options[2] = m.a;
+                params.macro_edge = m.a;
                 (
                     &m.fine.refs,
                     bytemuck::cast_slice(&m.fine.cell_start),

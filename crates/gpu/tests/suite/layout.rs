@@ -28,11 +28,11 @@ macro_rules! check {
 
 #[test]
 fn rust_and_wgsl_structs_have_the_same_layout() {
-    let trace = naga::front::wgsl::parse_str(&compose("multires.wgsl").unwrap()).unwrap();
+    let trace = naga::front::wgsl::parse_str(&compose("hierarchy.wgsl").unwrap()).unwrap();
     check!(trace, "Ray", GpuRay, [origin_tmin, dir_tmax]);
     check!(trace, "Hit", GpuHit, [t, triangle, u, v]);
     check!(trace, "RayStats", GpuRayStats, [cells, tests]);
-    check!(trace, "Params", GridParams, [grid_min, inv_cell, res, options]);
+    check!(trace, "Params", GridParams, [grid_min, inv_cell, res, ray_count, mailbox, macro_edge, first_ray, pad]);
     check!(trace, "Node", GpuNode, [res_first]);
     let render = naga::front::wgsl::parse_str(&compose("shade.wgsl").unwrap()).unwrap();
     check!(render, "Camera", GpuCamera, [eye, right, up, forward]);

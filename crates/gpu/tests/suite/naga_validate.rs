@@ -1,6 +1,7 @@
 //! Every .wgsl under shaders/ composes, parses and validates with naga (all validation flags).
 
-use gridrt_gpu::shaders::{SOURCES, WALKERS, compose_with};
+use gridrt_gpu::GpuWalker;
+use gridrt_gpu::shaders::{SOURCES, compose_with};
 
 #[test]
 fn every_wgsl_file_composes_parses_and_validates() {
@@ -24,7 +25,7 @@ fn every_wgsl_file_composes_parses_and_validates() {
     assert_eq!(on_disk, embedded, "shaders/ and the embedded list in crates/gpu/src/shaders.rs differ");
     let mut failures = Vec::new();
     // Every file with every walker a trace kernel can be composed with.
-    for (name, walker) in on_disk.iter().flat_map(|n| WALKERS.map(|w| (n, w))) {
+    for (name, walker) in on_disk.iter().flat_map(|n| GpuWalker::ALL.map(|w| (n, w))) {
         let src = match compose_with(name, walker) {
             Ok(s) => s,
             Err(e) => {
@@ -47,5 +48,5 @@ fn every_wgsl_file_composes_parses_and_validates() {
         }
     }
     assert!(failures.is_empty(), "{} of {} shaders failed:\n{}", failures.len(), on_disk.len(), failures.join("\n\n"));
-    println!("{} shaders validated with each of {} walkers", on_disk.len(), WALKERS.len());
+    println!("{} shaders validated with each of {} walkers", on_disk.len(), GpuWalker::ALL.len());
 }

@@ -1,0 +1,98 @@
+//! The trace kernels and the walkers they are composed with, as types: which WGSL file and
+//! entry point traces a structure (one kernel per structure; multi-resolution and two-level
+//! grids share the hierarchy kernel), and which walker file (`shaders/shared/walker_*.wgsl`)
+//! stands for `{TRAVERSAL}` in its includes.
+
+use gridrt_grid::{GridKind, Traversal};
+
+use crate::context::GpuError;
+
+/// A trace kernel: `shaders/<file>`, entry point `trace_<name>`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kernel {
+    Flat,
+    Macrocell,
+    /// Multi-resolution and two-level grids (one layout, one kernel).
+    Hierarchy,
+    Proximity,
+}
+
+impl Kernel {
+    pub const ALL: [Kernel; 4] = [Kernel::Flat, Kernel::Macrocell, Kernel::Hierarchy, Kernel::Proximity];
+
+    /// The kernel that traces a structure of `kind`.
+    pub fn for_kind(kind: GridKind) -> Kernel {
+        match kind {
+            GridKind::Flat => Kernel::Flat,
+            GridKind::Macrocell => Kernel::Macrocell,
+            GridKind::Multires | GridKind::TwoLevel => Kernel::Hierarchy,
+            GridKind::Proximity => Kernel::Proximity,
+        }
+    }
+
+    /// The WGSL file under `shaders/`.
+    pub fn file(self) -> &'static str {
+        match self {
+            Kernel::Flat => "flat.wgsl",
+            Kernel::Macrocell => "macrocell.wgsl",
+            Kernel::Hierarchy => "hierarchy.wgsl",
+            Kernel::Proximity => "proximity.wgsl",
+        }
+    }
+
+    /// The entry point.
+    pub fn entry(self) -> &'static str {
+        match self {
+            Kernel::Flat => "trace_flat",
+            Kernel::Macrocell => "trace_macrocell",
+            Kernel::Hierarchy => "trace_hierarchy",
+            Kernel::Proximity => "trace_proximity",
+        }
+    }
+}
+
+/// A GPU walker: `shaders/shared/walker_<name>.wgsl`, the port of the CPU traversal of the
+/// same [`Traversal`] (naive Bresenham has none: it is incomplete by design).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum GpuWalker {
+    #[default]
+    AmanatidesWoo,
+    ClearyWyvill,
+    Liu,
+}
+
+impl GpuWalker {
+    pub const ALL: [GpuWalker; 3] = [GpuWalker::AmanatidesWoo, GpuWalker::ClearyWyvill, GpuWalker::Liu];
+
+    /// The walker porting `traversal`.
+    pub fn for_traversal(traversal: Traversal) -> Result<GpuWalker, GpuError> {
+        match traversal {
+            Traversal::AmanatidesWoo => Ok(GpuWalker::AmanatidesWoo),
+            Traversal::ClearyWyvill => Ok(GpuWalker::ClearyWyvill),
+            Traversal::Liu => Ok(GpuWalker::Liu),
+            Traversal::Bresenham => {
+                Err(GpuError::Unsupported("naive Bresenham has no GPU kernel (it is incomplete by design)".into()))
+            }
+        }
+    }
+
+    /// The CPU traversal this walker ports.
+    pub fn traversal(self) -> Traversal {
+        match self {
+            GpuWalker::AmanatidesWoo => Traversal::AmanatidesWoo,
+            GpuWalker::ClearyWyvill => Traversal::ClearyWyvill,
+            GpuWalker::Liu => Traversal::Liu,
+        }
+    }
+
+    /// What `{TRAVERSAL}` becomes in an include: the traversal's short name (`aw`, `cw`, `liu`).
+    pub fn name(self) -> &'static str {
+        self.traversal().short_name()
+    }
+}
+
+impl std::fmt::Display for GpuWalker {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}

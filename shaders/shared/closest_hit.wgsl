@@ -1,0 +1,84 @@
+//!include shared/bindings.wgsl
+//!include shared/ray.wgsl
+//!include shared/triangle.wgsl
+//!include shared/walker_{TRAVERSAL}.wgsl
+// The closest-hit rule, written once for every trace kernel (CPU port:
+// crates/grid/src/trace/closest_hit.rs). A kernel calls `begin_ray`, walks its structure's cells
+// in order of increasing t, hands each leaf's references to `test_cell` and stops when it says
+// the search is done (the best hit lies before the cell's exit), then calls `end_ray`.
+
+// One invocation's search: its ray, best hit so far (by t, then triangle index), counters and
+// mailbox. Private (per-invocation) so every kernel and walker shares them without passing them.
+var<private> ray: PreparedRay;
+// The ray in the grid space of the flat / top grid, clipped to its box.
+var<private> top_ray: GridRay;
+var<private> best: Hit;
+var<private> stats: RayStats;
+var<private> mailbox: array<u32, 16>;
+
+// Starts the search of ray `i`: false when `i` is past the dispatch, the ray can hit nothing or
+// misses the grid's box (then there is nothing to walk; `end_ray` still writes the miss).
+fn begin_ray(i: u32) -> bool {
+    best = miss();
+    stats = RayStats(0u, 0u);
+    mailbox = empty_mailbox();
+    if i >= params.ray_count {
+        return false;
+    }
+    ray = prepare_ray(rays[i]);
+    if !ray.valid {
+        return false;
+    }
+    top_ray = clip_ray((ray.org - params.grid_min.xyz) * params.inv_cell.xyz, ray.dir * params.inv_cell.xyz, params.res,
+                       ray.tmin, ray.tmax);
+    return !ray_is_empty(top_ray);
+}
+
+// Writes ray `i`'s hit and counters (nothing past the dispatch).
+fn end_ray(i: u32) {
+    if i < params.ray_count {
+        hits[i] = best;
+        ray_stats[i] = stats;
+    }
+}
+
+// Counts one visited cell (a leaf, an internal cell or a skipped block).
+fn visit_cell() {
+    stats.cells += 1u;
+}
+
+// Tests refs[first .. end], a leaf the ray leaves at `t_exit` (skipping mailboxed triangles);
+// true when the search is done.
+fn test_cell(first: u32, end: u32, t_exit: f32) -> bool {
+    let use_mailbox = params.mailbox != 0u;
+    for (var k = first; k < end; k++) {
+        test_triangle(refs[k], use_mailbox);
+    }
+    return done_at(t_exit);
+}
+
+// True when the best hit lies before `t_exit` (the end of a cell or block just crossed).
+fn done_at(t_exit: f32) -> bool {
+    return best.t < t_exit;
+}
+
+// Tests one referenced triangle, updating the best hit, the counters and the mailbox.
+fn test_triangle(tri: u32, use_mailbox: bool) {
+    if use_mailbox {
+        let slot = tri & (MAILBOX_SIZE - 1u);
+        if mailbox[slot] == tri {
+            return;
+        }
+        mailbox[slot] = tri;
+    }
+    stats.tests += 1u;
+    let h = intersect_triangle(ray, tri);
+    if h.hit && closer(h.t, tri, best) {
+        best = Hit(h.t, tri, h.u, h.v);
+    }
+}
+
+fn cell_index(c: vec3<i32>, res: vec3<u32>) -> u32 {
+    let u = vec3<u32>(c);
+    return u.x + res.x * (u.y + res.y * u.z);
+}
