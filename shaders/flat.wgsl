@@ -5,7 +5,8 @@
 // M + 1 offsets into `refs`. Mirrors FlatGrid::cell_start.
 @group(0) @binding(6) var<storage, read> cell_start: array<u32>;
 
-fn walk_flat(g: GridRay) {
+// The flat grid's walk: every crossed cell in order (called by `trace` in shared/closest_hit.wgsl).
+fn walk(g: GridRay) {
     var w = walker_init(g, params.res);
     loop {
         if !walker_next(&w) {
@@ -17,12 +18,4 @@ fn walk_flat(g: GridRay) {
             return;
         }
     }
-}
-
-@compute @workgroup_size(64)
-fn trace_flat(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if begin_ray(gid.x) {
-        walk_flat(top_ray);
-    }
-    end_ray(gid.x);
 }

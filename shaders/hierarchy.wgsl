@@ -28,8 +28,7 @@ struct Frame {
 // The saved parents live in seven named variables, not an array<Frame, 7>: a dynamically
 // indexed private array is per-lane scratch memory, which lavapipe reads and writes lane by
 // lane (a Walker is ~30 scalars), while a switch over named variables compiles to masked
-// register moves. Measured on lavapipe (bunny, 500k rays): multires 1.8 / 0.6 -> 3.3 / 0.9
-// Mrays/s (primary / random).
+// register moves (the README's GPU section has the measured difference).
 struct Stack {
     f0: Frame,
     f1: Frame,
@@ -64,7 +63,9 @@ fn stack_load(s: ptr<function, Stack>, depth: u32) -> Frame {
     }
 }
 
-fn walk_hierarchy(top: GridRay) {
+// The hierarchy's walk: a walker per level, descending into child grids (called by `trace` in
+// shared/closest_hit.wgsl).
+fn walk(top: GridRay) {
     // Parents of the current level; the current walker lives in `w` (copied only on descent
     // and return).
     var stack: Stack;
@@ -108,12 +109,4 @@ fn walk_hierarchy(top: GridRay) {
             return;
         }
     }
-}
-
-@compute @workgroup_size(64)
-fn trace_hierarchy(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if begin_ray(gid.x) {
-        walk_hierarchy(top_ray);
-    }
-    end_ray(gid.x);
 }

@@ -28,7 +28,9 @@ fn walk_block(fine: GridRay, m: vec3<i32>, t_enter: f32, t_exit: f32) -> bool {
     return false;
 }
 
-fn walk_macrocells(fine: GridRay) {
+// The macro grid's walk, descending into occupied macrocells (called by `trace` in
+// shared/closest_hit.wgsl).
+fn walk(fine: GridRay) {
     let af = f32(params.macro_edge);
     let macro_res = params.res / params.macro_edge;
     // Exact: A is a power of two.
@@ -50,12 +52,4 @@ fn walk_macrocells(fine: GridRay) {
         }
         t_enter = mw.out_t_exit;
     }
-}
-
-@compute @workgroup_size(64)
-fn trace_macrocell(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if begin_ray(gid.x) {
-        walk_macrocells(top_ray);
-    }
-    end_ray(gid.x);
 }

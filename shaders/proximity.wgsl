@@ -18,8 +18,9 @@ fn exit_of_box(g: GridRay, lo: vec3<i32>, hi: vec3<i32>) -> f32 {
     return t;
 }
 
-// The flat grid's walk, restarted beyond the empty cube around a cell at distance k >= 2.
-fn walk_proximity(g_in: GridRay) {
+// The flat grid's walk, restarted beyond the empty cube around a cell at distance k >= 2 (called
+// by `trace` in shared/closest_hit.wgsl).
+fn walk(g_in: GridRay) {
     var g = g_in;
     let resi = vec3<i32>(params.res);
     var w = walker_init(g, params.res);
@@ -48,12 +49,4 @@ fn walk_proximity(g_in: GridRay) {
             return;
         }
     }
-}
-
-@compute @workgroup_size(64)
-fn trace_proximity(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if begin_ray(gid.x) {
-        walk_proximity(top_ray);
-    }
-    end_ray(gid.x);
 }

@@ -3,9 +3,11 @@
 //!include shared/triangle.wgsl
 //!include shared/walker_{TRAVERSAL}.wgsl
 // The closest-hit rule, written once for every trace kernel (CPU port:
-// crates/grid/src/trace/closest_hit.rs). A kernel calls `begin_ray`, walks its structure's cells
-// in order of increasing t, hands each leaf's references to `test_cell` and stops when it says
-// the search is done (the best hit lies before the cell's exit), then calls `end_ray`.
+// crates/grid/src/trace/closest_hit.rs), and the kernels' one entry point, `trace`: it prepares
+// the ray and clips it to the grid, calls the structure's `walk` (defined by the kernel file
+// that includes this one), and writes the hit and counters. `walk` visits the structure's cells
+// in order of increasing t, hands each leaf's references to `test_cell` and returns when it says
+// the search is done (the best hit lies before the cell's exit).
 
 // One invocation's search: its ray, best hit so far (by t, then triangle index), counters and
 // mailbox. Private (per-invocation) so every kernel and walker shares them without passing them.
@@ -81,4 +83,12 @@ fn test_triangle(tri: u32, use_mailbox: bool) {
 fn cell_index(c: vec3<i32>, res: vec3<u32>) -> u32 {
     let u = vec3<u32>(c);
     return u.x + res.x * (u.y + res.y * u.z);
+}
+
+@compute @workgroup_size(64)
+fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if begin_ray(gid.x) {
+        walk(top_ray);
+    }
+    end_ray(gid.x);
 }

@@ -7,7 +7,8 @@ use gridrt_grid::{GridKind, Traversal};
 
 use crate::context::GpuError;
 
-/// A trace kernel: `shaders/<file>`, entry point `trace_<name>`.
+/// A trace kernel: `shaders/<file>`, whose entry point is [`Kernel::ENTRY`] (in
+/// `shaders/shared/closest_hit.wgsl`, calling the file's `walk`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Kernel {
     Flat,
@@ -18,6 +19,8 @@ pub enum Kernel {
 }
 
 impl Kernel {
+    /// Every trace kernel's entry point.
+    pub const ENTRY: &'static str = "trace";
     pub const ALL: [Kernel; 4] = [Kernel::Flat, Kernel::Macrocell, Kernel::Hierarchy, Kernel::Proximity];
 
     /// The kernel that traces a structure of `kind`.
@@ -37,16 +40,6 @@ impl Kernel {
             Kernel::Macrocell => "macrocell.wgsl",
             Kernel::Hierarchy => "hierarchy.wgsl",
             Kernel::Proximity => "proximity.wgsl",
-        }
-    }
-
-    /// The entry point.
-    pub fn entry(self) -> &'static str {
-        match self {
-            Kernel::Flat => "trace_flat",
-            Kernel::Macrocell => "trace_macrocell",
-            Kernel::Hierarchy => "trace_hierarchy",
-            Kernel::Proximity => "trace_proximity",
         }
     }
 }

@@ -125,7 +125,7 @@ impl Tracer {
         if let Some(p) = map.get(&(kernel, walker)) {
             return Ok(p.clone());
         }
-        let p = pipeline_walking(ctx, kernel.file(), kernel.entry(), walker)?;
+        let p = pipeline_walking(ctx, kernel.file(), Kernel::ENTRY, walker)?;
         map.insert((kernel, walker), p.clone());
         Ok(p)
     }
