@@ -81,7 +81,7 @@ pub fn write_hits(path: &Path, hits: &[Hit]) -> Result<(), RayFileError> {
 }
 
 /// `count` rays with origins uniform in `bounds` grown by 10% and directions uniform on the
-/// sphere, `[0, inf)`: the "random rays" of the survey's cost model (and of PEERS.md).
+/// sphere, `[0, inf)`: the "random rays" of the survey's cost model and of the BVH benchmark.
 pub fn random_rays(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
     let mut rng = Rng::new(seed);
     let pad = bounds.extent() * 0.05;

@@ -2,7 +2,7 @@
 //!
 //! Chromium is started with `--remote-debugging-port=0` and a fresh profile; it writes the
 //! port it chose to `DevToolsActivePort` in that profile. We attach to the page target with a
-//! flattened session and evaluate JavaScript in it. The flags are the ones DEVELOPERS.md lists:
+//! flattened session and evaluate JavaScript in it. The flags expose WebGPU in headless Chromium:
 //! WebGPU over SwiftShader's Vulkan, without which the WebGPU canvas is missing from screenshots.
 
 use std::collections::VecDeque;

@@ -202,7 +202,7 @@ fn drive(
     if gpu != "ok" {
         bail!(
             "WebGPU is unavailable in this Chromium ({}): the browser demo cannot run. \
-             Check the flags in DEVELOPERS.md (--enable-unsafe-webgpu, Vulkan over SwiftShader).",
+             Check the browser flags in crates/xtask/src/cdp.rs (--enable-unsafe-webgpu, Vulkan over SwiftShader).",
             gpu.as_str().unwrap_or("?")
         );
     }

@@ -1,7 +1,8 @@
 //! Work that must not block the UI: loading a scene and building a structure run on a thread
 //! (natively) and hand their result back through a channel; the UI polls each frame and shows
-//! a spinner with the elapsed time meanwhile. On wasm, where std threads do not exist, the job
-//! runs on the page's thread once the browser has painted.
+//! a spinner with the elapsed time meanwhile. In the browser, where std threads do not exist,
+//! builds go to the build worker ([`spawn_build`]); loads, and builds when the worker cannot
+//! start, run on the page's thread once the browser has painted.
 
 use std::path::PathBuf;
 use std::sync::Arc;

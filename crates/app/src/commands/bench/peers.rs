@@ -8,7 +8,7 @@
 //! with obvhs' own f32 triangle test, the way its examples use it, to show what the shared
 //! test costs it.
 //!
-//! Pitfalls handled here (see the shared PEERS.md):
+//! Pitfalls of benchmarking BVH libraries, handled here:
 //! - `bvh` has no closest-hit traversal (`traverse` returns every shape whose box is hit, its
 //!   iterator has a 32-entry stack and its ray/triangle test culls back faces), so it is
 //!   traversed by an ordered closest-hit loop over its public `nodes`: nearer child first,
@@ -71,7 +71,7 @@ impl PeerKind {
     }
 
     /// Whether the library's build runs on all threads (`bvh`'s `build_par`; obvhs' `parallel`
-    /// feature is off, as PEERS.md advises for 2 cores).
+    /// feature is off: on 2 cores its threads only add contention).
     pub fn parallel_build(self) -> bool {
         self == PeerKind::Bvh
     }
