@@ -132,7 +132,7 @@ impl GridrtApp {
     pub(super) fn update_hook(&mut self) {
         if self.first_frame_ms.is_none() && self.viewport.frames_done > 0 {
             #[cfg(target_arch = "wasm32")]
-            let ms = web::page_ms();
+            let ms = super::web::page_ms();
             #[cfg(not(target_arch = "wasm32"))]
             let ms = Some(self.started.elapsed().as_secs_f64() * 1e3);
             self.first_frame_ms = ms;
