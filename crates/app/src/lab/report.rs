@@ -74,6 +74,22 @@ pub struct Chart {
     pub x_names: Option<Vec<String>>,
 }
 
+impl Chart {
+    /// A chart of `series` on log–log axes, without markers or category names.
+    pub fn log_log(title: &str, x_label: &str, y_label: &str, series: Vec<Series>) -> Chart {
+        Chart {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_x: true,
+            log_y: true,
+            series,
+            markers: vec![],
+            x_names: None,
+        }
+    }
+}
+
 /// Colours that stay apart on white (no yellow): ten, so bench's ten structures per scene
 /// never share one.
 const PALETTE: [RGBColor; 10] = [

@@ -218,16 +218,12 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     save_chart(
         &args.out,
         "cost-constants",
-        &Chart {
-            title: "Measured against fitted time per ray".into(),
-            x_label: "fitted Tsetup + m·Tstep + μ·Tinter (ns)".into(),
-            y_label: "measured ns per ray".into(),
-            log_x: true,
-            log_y: true,
+        &Chart::log_log(
+            "Measured against fitted time per ray",
+            "fitted Tsetup + m·Tstep + μ·Tinter (ns)",
+            "measured ns per ray",
             series,
-            markers: vec![],
-            x_names: None,
-        },
+        ),
     )?;
     println!(
         "Cost constants fitted to {} configurations ({} rays each, half primary, half random):",

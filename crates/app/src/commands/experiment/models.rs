@@ -136,16 +136,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     save_chart(
         &args.out,
         "models",
-        &Chart {
-            title: "Fastest resolution against N (CPU, random rays)".into(),
-            x_label: "triangles N".into(),
-            y_label: "cells M".into(),
-            log_x: true,
-            log_y: true,
-            series,
-            markers: vec![],
-            x_names: None,
-        },
+        &Chart::log_log("Fastest resolution against N (CPU, random rays)", "triangles N", "cells M", series),
     )?;
     println!("Fastest flat-grid resolution against N ({rays_n} random rays, CPU):");
     print_table(
