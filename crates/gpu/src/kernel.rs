@@ -5,8 +5,6 @@
 
 use gridrt_grid::{GridKind, Traversal};
 
-use crate::context::GpuError;
-
 /// A trace kernel: `shaders/<file>`, whose entry point is [`Kernel::ENTRY`] (in
 /// `shaders/shared/closest_hit.wgsl`, calling the file's `walk`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -57,15 +55,13 @@ pub enum GpuWalker {
 impl GpuWalker {
     pub const ALL: [GpuWalker; 3] = [GpuWalker::AmanatidesWoo, GpuWalker::ClearyWyvill, GpuWalker::Liu];
 
-    /// The walker porting `traversal`.
-    pub fn for_traversal(traversal: Traversal) -> Result<GpuWalker, GpuError> {
+    /// The walker porting `traversal`; `None` for naive Bresenham, which has none.
+    pub fn for_traversal(traversal: Traversal) -> Option<GpuWalker> {
         match traversal {
-            Traversal::AmanatidesWoo => Ok(GpuWalker::AmanatidesWoo),
-            Traversal::ClearyWyvill => Ok(GpuWalker::ClearyWyvill),
-            Traversal::Liu => Ok(GpuWalker::Liu),
-            Traversal::Bresenham => {
-                Err(GpuError::Unsupported("naive Bresenham has no GPU kernel (it is incomplete by design)".into()))
-            }
+            Traversal::AmanatidesWoo => Some(GpuWalker::AmanatidesWoo),
+            Traversal::ClearyWyvill => Some(GpuWalker::ClearyWyvill),
+            Traversal::Liu => Some(GpuWalker::Liu),
+            Traversal::Bresenham => None,
         }
     }
 

@@ -16,9 +16,8 @@ use gridrt_scene::{Aabb, Camera, Hit};
 
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
-use crate::kernel::GpuWalker;
 use crate::layout::{FrameTotals, GpuHit, GpuRayStats, GridParams, ShadeParams};
-use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back};
+use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, walker_for};
 use crate::upload::{GpuScene, GpuStructure};
 
 /// What the image shows (`--view`).
@@ -311,7 +310,7 @@ impl Renderer {
                 t.capacity
             )));
         }
-        let walker = GpuWalker::for_traversal(o.traversal)?;
+        let walker = walker_for(o.traversal)?;
         let dev = &ctx.device;
         let q = &ctx.queue;
         let cam = gpu_camera(&o.camera, o.width, o.height);

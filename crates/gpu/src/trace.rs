@@ -18,6 +18,13 @@ use crate::upload::{GpuScene, GpuStructure};
 /// Threads per workgroup of every kernel (`@workgroup_size(64)`).
 pub const WORKGROUP: u32 = 64;
 
+/// The GPU walker of `traversal`, or an error for naive Bresenham (incomplete by design, so it
+/// has no kernel).
+pub fn walker_for(traversal: Traversal) -> Result<GpuWalker, GpuError> {
+    GpuWalker::for_traversal(traversal)
+        .ok_or_else(|| GpuError::Unsupported("naive Bresenham has no GPU kernel (it is incomplete by design)".into()))
+}
+
 /// Creates a compute pipeline for `entry` in the composed shader `file` (auto layout).
 pub(crate) fn pipeline(ctx: &GpuContext, file: &str, entry: &str) -> Result<wgpu::ComputePipeline, GpuError> {
     pipeline_walking(ctx, file, entry, GpuWalker::default())
@@ -179,7 +186,7 @@ impl Tracer {
         let max_by_binding = limits.max_storage_buffer_binding_size / std::mem::size_of::<GpuRay>() as u64;
         let max_by_dispatch = limits.max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64;
         let chunk = (1u64 << 20).min(max_by_binding).min(max_by_dispatch).max(1) as usize;
-        let walker = GpuWalker::for_traversal(traversal)?;
+        let walker = walker_for(traversal)?;
         let n = chunk.min(rays.len().max(1));
         let mut scratch = self.scratch.lock().expect("tracer scratch lock");
         if scratch.as_ref().is_none_or(|b| b.capacity < n) {
