@@ -19,8 +19,6 @@ pub enum Kernel {
 impl Kernel {
     /// Every trace kernel's entry point.
     pub const ENTRY: &'static str = "trace";
-    pub const ALL: [Kernel; 4] = [Kernel::Flat, Kernel::Macrocell, Kernel::Hierarchy, Kernel::Proximity];
-
     /// The kernel that traces a structure of `kind`.
     pub fn for_kind(kind: GridKind) -> Kernel {
         match kind {

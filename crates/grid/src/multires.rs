@@ -201,12 +201,7 @@ impl Ctx<'_> {
                             sub.refs.extend_from_slice(cell_ids);
                         }
                     }
-                    if sub.refs.len() as u64 > crate::build::MAX_REFS {
-                        return Err(BuildError::TooManyReferences {
-                            refs: sub.refs.len() as u64,
-                            limit: crate::build::MAX_REFS,
-                        });
-                    }
+                    crate::build::check_refs(sub.refs.len() as u64)?;
                 }
             }
         }
@@ -249,9 +244,7 @@ pub fn build(
             (0..cells).map(one).collect()
         })?;
     let total: u64 = subtrees.iter().flatten().map(|s| s.refs.len() as u64).sum::<u64>() + top.refs.len() as u64;
-    if total > crate::build::MAX_REFS {
-        return Err(BuildError::TooManyReferences { refs: total, limit: crate::build::MAX_REFS });
-    }
+    crate::build::check_refs(total)?;
     let h = times.record("assemble", || {
         let mut root = Subtree::default();
         root.nodes.push(Node {

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::SceneError;
+use crate::file_read::{ReadFault, read_regular_file};
 use crate::load_budget::LoadLimits;
 
 /// Required extensions that leave geometry as plain accessors (materials, textures, lights).
@@ -28,25 +29,20 @@ const GEOMETRY_NEUTRAL_EXTENSIONS: &[&str] = &[
 /// Largest scene file read (also bounds external buffers).
 pub const MAX_FILE_BYTES: u64 = 2 << 30;
 
+/// The bytes of the scene file `path`, within [`MAX_FILE_BYTES`] and the byte budget.
 pub(crate) fn read_file_bounded(path: &Path, name: &str, limits: &LoadLimits) -> Result<Vec<u8>, SceneError> {
-    let io = |err| SceneError::Io { source_name: name.to_string(), err };
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        return Err(SceneError::Io {
-            source_name: name.to_string(),
-            err: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"),
-        });
-    }
     let limit = MAX_FILE_BYTES.min(limits.max_bytes);
-    if meta.len() > limit {
-        return Err(SceneError::TooLarge {
-            source_name: name.to_string(),
-            what: "file size in bytes",
-            count: meta.len(),
-            limit,
-        });
-    }
-    std::fs::read(path).map_err(io)
+    let source_name = name.to_string();
+    read_regular_file(path, limit).map_err(|fault| match fault {
+        ReadFault::Io(err) => SceneError::Io { source_name, err },
+        ReadFault::NotAFile => SceneError::Io {
+            source_name,
+            err: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"),
+        },
+        ReadFault::TooLarge { len } => {
+            SceneError::TooLarge { source_name, what: "file size in bytes", count: len, limit }
+        }
+    })
 }
 
 /// Classifies the file before handing it to the `gltf` crate, so that the common failure

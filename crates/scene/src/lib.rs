@@ -5,6 +5,7 @@ pub(crate) mod accessor;
 pub(crate) mod animation_data;
 pub mod camera;
 pub mod error;
+mod file_read;
 pub mod glb_write;
 pub mod gltf_file;
 pub mod gltf_load;

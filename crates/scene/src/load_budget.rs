@@ -39,7 +39,13 @@ impl Default for LoadLimits {
 /// Default byte budget: a quarter of physical memory and at most half of the process's
 /// address-space limit (`ulimit -v`), at least 64 MiB; 1 GiB where neither can be read
 /// (the browser, systems without `/proc`).
+/// Read once per process (the limits of a running process do not change under it).
 pub fn default_max_bytes() -> u64 {
+    static BYTES: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    *BYTES.get_or_init(measure_max_bytes)
+}
+
+fn measure_max_bytes() -> u64 {
     let physical = read_proc_number("/proc/meminfo", "MemTotal:").map(|kb| kb.saturating_mul(1024) / 4);
     let address_space = read_proc_number("/proc/self/limits", "Max address space").map(|b| b / 2);
     let budget = match (physical, address_space) {

@@ -12,6 +12,7 @@ use glam::Vec3;
 
 use crate::camera::Camera;
 use crate::error::RayFileError;
+use crate::file_read::{ReadFault, read_regular_file};
 use crate::mesh::{Aabb, Mesh};
 use crate::ray::{Hit, Ray};
 use crate::rng::Rng;
@@ -60,15 +61,13 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>, RayFileError> {
 /// A regular file's bytes, refused above [`crate::load_budget::default_max_bytes`] (each
 /// record read is also a record written).
 fn read_bounded(path: &Path) -> Result<Vec<u8>, RayFileError> {
-    let meta = std::fs::metadata(path).map_err(io_err(path))?;
-    if !meta.is_file() {
-        return Err(RayFileError::NotAFile { source_name: path.display().to_string() });
-    }
     let limit = crate::load_budget::default_max_bytes();
-    if meta.len() > limit {
-        return Err(RayFileError::TooLarge { source_name: path.display().to_string(), len: meta.len(), limit });
-    }
-    std::fs::read(path).map_err(io_err(path))
+    let source_name = path.display().to_string();
+    read_regular_file(path, limit).map_err(|fault| match fault {
+        ReadFault::Io(err) => RayFileError::Io { source_name, err },
+        ReadFault::NotAFile => RayFileError::NotAFile { source_name },
+        ReadFault::TooLarge { len } => RayFileError::TooLarge { source_name, len, limit },
+    })
 }
 pub fn write_rays(path: &Path, rays: &[Ray]) -> Result<(), RayFileError> {
     std::fs::write(path, rays_to_bytes(rays)).map_err(io_err(path))

@@ -27,7 +27,7 @@ pub fn matrix_rays(full: usize) -> usize {
 }
 
 /// The shared-scene folder, `../shared/scenes` beside the repository.
-pub fn shared_dir() -> PathBuf {
+fn shared_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes")
 }
 

@@ -5,7 +5,7 @@
 use glam::{UVec3, Vec3};
 use web_time::Instant;
 
-use super::{MAX_REFS, PhaseTimes, zeroed};
+use super::{PhaseTimes, check_refs, zeroed};
 use crate::BuildError;
 use crate::geometry::GridGeometry;
 use crate::insert::{InsertMode, for_each_cell, prepare};
@@ -17,9 +17,7 @@ pub fn prefix_sum(counts: impl Iterator<Item = u32>, cells: usize) -> Result<Vec
     for c in counts {
         start.push(acc as u32);
         acc += c as u64;
-        if acc > MAX_REFS {
-            return Err(BuildError::TooManyReferences { refs: acc, limit: MAX_REFS });
-        }
+        check_refs(acc)?;
     }
     start.push(acc as u32);
     Ok(start)
@@ -54,8 +52,8 @@ pub fn bucket(
         // box's cell count bounds the triangle's references from above).
         let e = g.hi - g.lo + UVec3::ONE;
         upper += e.x as u64 * e.y as u64 * e.z as u64;
-        if mode == InsertMode::BoundingBox && upper > MAX_REFS {
-            return Err(BuildError::TooManyReferences { refs: upper, limit: MAX_REFS });
+        if mode == InsertMode::BoundingBox {
+            check_refs(upper)?;
         }
         for_each_cell(geom, &g, mode, |c| counts[c] += 1);
     }

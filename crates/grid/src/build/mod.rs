@@ -55,6 +55,14 @@ pub fn zeroed<T: Copy + Default>(n: usize, what: &'static str) -> Result<Vec<T>,
     Ok(v)
 }
 
+/// Refuses a grid that would hold `refs` triangle references, more than [`MAX_REFS`].
+pub fn check_refs(refs: u64) -> Result<(), BuildError> {
+    if refs > MAX_REFS {
+        return Err(BuildError::TooManyReferences { refs, limit: MAX_REFS });
+    }
+    Ok(())
+}
+
 /// Refuses a grid of resolution `res` with more than `limit` cells, before anything is allocated.
 pub fn check_cells(res: [u32; 3], limit: u64) -> Result<(), BuildError> {
     let cells = res.iter().map(|&r| r as u64).product::<u64>();

@@ -6,7 +6,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::{MAX_REFS, PhaseTimes, zeroed};
+use super::{PhaseTimes, check_refs, zeroed};
 use crate::BuildError;
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use crate::insert::{InsertMode, for_each_cell_in_layers, prepare};
@@ -22,9 +22,7 @@ fn par_inclusive_scan(counts: &mut [u32]) -> Result<u64, BuildError> {
         offsets.push(total);
         total += s;
     }
-    if total > MAX_REFS {
-        return Err(BuildError::TooManyReferences { refs: total, limit: MAX_REFS });
-    }
+    check_refs(total)?;
     counts.par_chunks_mut(CHUNK).zip(offsets).for_each(|(c, offset)| {
         // Fits: every partial sum is at most `total` ≤ MAX_REFS < 2³².
         let mut acc = offset as u32;
@@ -77,8 +75,8 @@ pub fn bucket(
     // one (a fine grid over long slivers would otherwise take minutes to fail).
     let upper: u64 = box_refs.par_iter().sum();
     drop(box_refs);
-    if mode == InsertMode::BoundingBox && upper > MAX_REFS {
-        return Err(BuildError::TooManyReferences { refs: upper, limit: MAX_REFS });
+    if mode == InsertMode::BoundingBox {
+        check_refs(upper)?;
     }
     let in_slab = |s: usize| {
         let (z0, z1) = (edge[s], edge[s + 1]);

@@ -352,7 +352,7 @@ fn auto_check(
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)?;
-    let (cost, cost_note) = crate::config::active_cost_model();
+    let (cost, cost_note) = crate::config::calibration::active_cost_model();
     eprintln!("bench: auto resolution with {cost_note}");
     #[cfg(not(feature = "peers"))]
     eprintln!("bench: built without the `peers` feature: no bvh/obvhs rows");

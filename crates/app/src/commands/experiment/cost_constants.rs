@@ -9,7 +9,7 @@
 //! micro-benchmark (cells stepped through an empty grid, triangle tests against one
 //! triangle) is reported beside the fit.
 //!
-//! `--save` stores the CPU constants in the calibration file ([`crate::config::calibration_path`]); the
+//! `--save` stores the CPU constants in the calibration file ([`crate::config::calibration::path`]); the
 //! command line's auto resolution then uses them instead of the survey's defaults.
 
 use std::time::Instant;
@@ -26,7 +26,7 @@ use gridrt_scene::rng::Rng;
 use serde::Serialize;
 
 use crate::cli::ExperimentArgs;
-use crate::config::{Calibration, Fit, calibration_path};
+use crate::config::calibration::{Calibration, Fit};
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::lab::scenes::{mixed_rays, pick_scenes};
 use crate::lab::sweep::{Gpu, machine, measure_config, upload};
@@ -263,12 +263,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         test_ns / step_ns
     );
     if args.save {
-        let path =
-            calibration_path().ok_or_else(|| anyhow::anyhow!("no HOME or XDG_CONFIG_HOME for the calibration file"))?;
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent)?;
-        }
-        std::fs::write(&path, serde_json::to_string_pretty(&calibration)?)?;
+        let path = calibration.save()?;
         println!(
             "saved the calibration to {} (auto resolution on the command line now uses the CPU constants)",
             path.display()

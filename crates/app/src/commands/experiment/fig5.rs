@@ -56,7 +56,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
     let tracer = Tracer::new();
     // The constants the command line's auto resolution uses: the calibration when saved.
-    let (model, note) = crate::config::active_cost_model();
+    let (model, note) = crate::config::calibration::active_cost_model();
     eprintln!("fig5: cost model with {note}");
     let model = CostModel { samples: if args.quick { 6 } else { 16 }, ..model };
     let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
