@@ -18,16 +18,16 @@
 //! counted exactly for A ∈ {2, 4, 8, 16}; the A minimising 1/A + f_A wins.
 
 use glam::{UVec3, Vec3};
-use gridrt_scene::{Hit, Ray};
+use gridrt_scene::{Aabb, Hit, Ray};
 use serde::{Deserialize, Serialize};
 
+use crate::BuildError;
 use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
 use crate::geometry::{GridGeometry, GridRay};
 use crate::stats::RayStats;
 use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, Walker};
-use crate::{BuildError, triangle_bounds};
 
 /// Macrocell sizes the cost model chooses among.
 pub const MACRO_SIZES: [u32; 4] = [2, 4, 8, 16];
@@ -55,17 +55,17 @@ pub struct MacroSample {
 
 impl MacrocellGrid {
     /// Builds the fine grid at `res` (rounded up to multiples of A) and the macro occupancy.
-    /// `a = None` lets the cost model choose A (see the module doc).
+    /// `a = None` lets the cost model choose A (see the module doc). `bounds`: of `tris`.
     pub fn build(
         tris: &[[Vec3; 3]],
+        bounds: &Aabb,
         res: [u32; 3],
         a: Option<u32>,
         opts: BuildOptions,
         times: &mut PhaseTimes,
     ) -> Result<(MacrocellGrid, Vec<MacroSample>), BuildError> {
-        let bounds = triangle_bounds(tris);
         let build_fine =
-            |res: [u32; 3], times: &mut PhaseTimes| FlatGrid::build(tris, GridGeometry::new(&bounds, res), opts, times);
+            |res: [u32; 3], times: &mut PhaseTimes| FlatGrid::build(tris, GridGeometry::new(bounds, res), opts, times);
         let (a, samples, probe) = match a {
             Some(a) => {
                 if !a.is_power_of_two() || a > 64 {

@@ -22,8 +22,10 @@
 //! on all threads and concatenated in cell order, bit-identical to the serial build.
 
 use glam::{UVec3, Vec3};
+use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
+use crate::BuildError;
 use crate::build::bucket::bucket;
 use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
@@ -31,7 +33,6 @@ use crate::geometry::GridGeometry;
 use crate::hierarchy::{CHILD, Hierarchy, MAX_CHILD_MARGIN, MAX_DEPTH, Node, cell_geometry, child_margin};
 use crate::insert::InsertMode;
 use crate::resolution::CostModel;
-use crate::{BuildError, triangle_bounds};
 
 /// Largest sub-grid resolution per axis.
 pub const MAX_SUB_RES: u32 = 64;
@@ -209,9 +210,11 @@ impl Ctx<'_> {
     }
 }
 
-/// Builds a multi-resolution grid whose top grid has resolution `top_res`.
+/// Builds a multi-resolution grid whose top grid has resolution `top_res` over `bounds` (of
+/// `tris`).
 pub fn build(
     tris: &[[Vec3; 3]],
+    bounds: &Aabb,
     top_res: [u32; 3],
     opts: MultiresOptions,
     build: BuildOptions,
@@ -220,8 +223,7 @@ pub fn build(
     if !(opts.density > 0.0 && opts.density.is_finite()) {
         return Err(BuildError::InvalidParameter(format!("density {} must be positive", opts.density)));
     }
-    let bounds = times.record("bounds", || triangle_bounds(tris));
-    let geom = GridGeometry::new(&bounds, top_res);
+    let geom = GridGeometry::new(bounds, top_res);
     crate::build::check_cells(geom.res.to_array(), opts.cost.max_cells)?;
     let top = FlatGrid::build(tris, geom, build, times)?;
     let ctx = Ctx { tris, opts, insert: build.insert, top_res: geom.res, cells: geom.cell_count().into() };

@@ -275,7 +275,8 @@ pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildRepo
         }
         GridKind::Macrocell => {
             let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto))?;
-            let (g, samples) = MacrocellGrid::build(tris, choice.resolution, cfg.macro_size, cfg.build, &mut times)?;
+            let (g, samples) =
+                MacrocellGrid::build(tris, &bounds, choice.resolution, cfg.macro_size, cfg.build, &mut times)?;
             macro_samples = samples;
             (AnyGrid::Macrocell(g), Some(choice))
         }
@@ -286,7 +287,7 @@ pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildRepo
                 cost: CostModel { max_cells: cfg.cost.max_cells, ..cfg.multires.cost },
                 ..cfg.multires
             };
-            let h = crate::multires::build(tris, choice.resolution, multires, cfg.build, &mut times)?;
+            let h = crate::multires::build(tris, &bounds, choice.resolution, multires, cfg.build, &mut times)?;
             (AnyGrid::Multires(h), Some(choice))
         }
         GridKind::TwoLevel => {
@@ -297,7 +298,8 @@ pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildRepo
                 }
                 None => (None, None),
             };
-            let h = crate::twolevel::build(tris, top, cfg.twolevel, cfg.build, cfg.cost.max_cells, &mut times)?;
+            let h =
+                crate::twolevel::build(tris, &bounds, top, cfg.twolevel, cfg.build, cfg.cost.max_cells, &mut times)?;
             (AnyGrid::TwoLevel(h), choice)
         }
     };

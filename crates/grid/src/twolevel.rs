@@ -7,13 +7,14 @@
 //! ([`crate::hierarchy`]): top cell → leaf grid → leaf cell → reference range.
 
 use glam::Vec3;
+use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
+use crate::BuildError;
 use crate::build::{BuildOptions, PhaseTimes};
 use crate::hierarchy::Hierarchy;
 use crate::multires::{MultiresOptions, Policy};
 use crate::resolution::{CostModel, cubic_cells};
-use crate::{BuildError, triangle_bounds};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TwoLevelOptions {
@@ -29,15 +30,17 @@ impl Default for TwoLevelOptions {
     }
 }
 
-/// The top resolution the two-level grid uses for `tris` (λ₁·N cells, near-cubic).
-pub fn top_resolution(tris: &[[Vec3; 3]], opts: &TwoLevelOptions) -> [u32; 3] {
-    cubic_cells(&triangle_bounds(tris), opts.top_density * tris.len() as f64)
+/// The top resolution the two-level grid uses for `triangles` triangles in `bounds` (λ₁·N
+/// cells, near-cubic).
+pub fn top_resolution(bounds: &Aabb, triangles: usize, opts: &TwoLevelOptions) -> [u32; 3] {
+    cubic_cells(bounds, opts.top_density * triangles as f64)
 }
 
-/// Builds a two-level grid; `top_res = None` uses [`top_resolution`]. `max_cells` bounds the
+/// Builds a two-level grid over `bounds` (of `tris`); `top_res = None` uses [`top_resolution`]. `max_cells` bounds the
 /// cells of both levels together.
 pub fn build(
     tris: &[[Vec3; 3]],
+    bounds: &Aabb,
     top_res: Option<[u32; 3]>,
     opts: TwoLevelOptions,
     build: BuildOptions,
@@ -51,7 +54,7 @@ pub fn build(
             opts.top_density, opts.leaf_density
         )));
     }
-    let top = top_res.unwrap_or_else(|| top_resolution(tris, &opts));
+    let top = top_res.unwrap_or_else(|| top_resolution(bounds, tris.len(), &opts));
     let m = MultiresOptions {
         policy: Policy::Adaptive,
         max_depth: 1,
@@ -59,5 +62,5 @@ pub fn build(
         cost: CostModel { max_cells, ..CostModel::default() },
         always_subdivide: true,
     };
-    crate::multires::build(tris, top, m, build, times)
+    crate::multires::build(tris, bounds, top, m, build, times)
 }
