@@ -17,9 +17,27 @@ mod limits;
 #[cfg(not(target_arch = "wasm32"))]
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
+        eprintln!("error: {}", one_line(&e));
         std::process::exit(1);
     }
+}
+
+/// An error and its causes on one line, joined by ": ". A cause the message before it already
+/// quotes (library errors name their source in their own text) is not repeated.
+#[cfg(not(target_arch = "wasm32"))]
+fn one_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string().replace('\n', " ");
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }
 
 #[cfg(not(target_arch = "wasm32"))]
