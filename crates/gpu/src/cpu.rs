@@ -7,6 +7,7 @@ use glam::Vec3;
 use gridrt_scene::{Camera, Ray};
 
 use crate::layout::GpuCamera;
+use crate::view::View;
 
 /// The camera constants the render kernels read.
 pub fn gpu_camera(cam: &Camera, width: u32, height: u32) -> GpuCamera {
@@ -99,11 +100,11 @@ pub fn shade_pixel(
     shadow_hit: &gridrt_scene::Hit,
     tri: [Vec3; 3],
 ) -> u32 {
-    let view = shade.view[0];
+    let view = View::from_code(shade.view[0]).unwrap_or_default();
     let hmax = f32::from_bits(shade.view[1]);
     match view {
-        3 => return pack_rgba(heat(stats.cells as f32 / hmax)),
-        4 => return pack_rgba(heat(stats.tests as f32 / hmax)),
+        View::HeatmapCells => return pack_rgba(heat(stats.cells as f32 / hmax)),
+        View::HeatmapTests => return pack_rgba(heat(stats.tests as f32 / hmax)),
         _ => {}
     }
     if !hit.is_hit() {
@@ -115,10 +116,10 @@ pub fn shade_pixel(
     if n.dot(dir) > 0.0 {
         n = -n;
     }
-    if view == 1 {
+    if view == View::Normals {
         return pack_rgba(n * 0.5 + 0.5);
     }
-    if view == 2 {
+    if view == View::Depth {
         let dist = hit.t * primary.d().length();
         let x = (dist - shade.depth[0]) / (shade.depth[1] - shade.depth[0]).max(1e-20);
         return pack_rgba(Vec3::splat(1.0 - x.clamp(0.0, 1.0)));

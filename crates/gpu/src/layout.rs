@@ -5,6 +5,14 @@
 
 use bytemuck::{Pod, Zeroable};
 
+/// Bytes per record of the per-ray buffers, from the structs below (one place for every
+/// buffer size and binding range).
+pub const RAY_BYTES: u64 = size_of::<GpuRay>() as u64;
+pub const HIT_BYTES: u64 = size_of::<GpuHit>() as u64;
+pub const STATS_BYTES: u64 = size_of::<GpuRayStats>() as u64;
+/// One packed RGBA8 pixel.
+pub const PIXEL_BYTES: u64 = size_of::<u32>() as u64;
+
 /// One ray: `origin.xyz, tmin`, `dir.xyz, tmax` (the ray file's record). WGSL `Ray`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

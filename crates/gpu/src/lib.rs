@@ -13,8 +13,10 @@ pub mod render;
 pub mod shaders;
 pub mod trace;
 pub mod upload;
+pub mod view;
 
 pub use context::{GpuContext, GpuError};
 pub use kernel::{GpuWalker, Kernel};
-pub use render::{Frame, FrameTarget, RenderOptions, Renderer, View};
+pub use render::{Frame, FrameTarget, RenderOptions, Renderer};
 pub use trace::Tracer;
+pub use view::View;

@@ -16,47 +16,12 @@ use gridrt_scene::{Aabb, Camera, Hit};
 
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
-use crate::layout::{FrameTotals, GpuHit, GpuRayStats, GridParams, ShadeParams};
+use crate::layout::{
+    FrameTotals, GpuHit, GpuRayStats, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams,
+};
 use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, walker_for};
 use crate::upload::{GpuScene, GpuStructure};
-
-/// What the image shows (`--view`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum View {
-    #[default]
-    Shaded,
-    Normals,
-    Depth,
-    HeatmapCells,
-    HeatmapTests,
-}
-
-impl View {
-    pub const ALL: [View; 5] = [View::Shaded, View::Normals, View::Depth, View::HeatmapCells, View::HeatmapTests];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            View::Shaded => "shaded",
-            View::Normals => "normals",
-            View::Depth => "depth",
-            View::HeatmapCells => "heatmap-cells",
-            View::HeatmapTests => "heatmap-tests",
-        }
-    }
-
-    fn code(self) -> u32 {
-        self as u32
-    }
-}
-
-impl std::str::FromStr for View {
-    type Err = String;
-    fn from_str(s: &str) -> Result<View, String> {
-        View::ALL.into_iter().find(|v| v.name() == s).ok_or_else(|| {
-            format!("unknown view \"{s}\": expected shaded, normals, depth, heatmap-cells or heatmap-tests")
-        })
-    }
-}
+use crate::view::View;
 
 /// One image request.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -169,13 +134,13 @@ impl FrameTarget {
             camera: buf("camera", size_of::<crate::layout::GpuCamera>() as u64, U::UNIFORM | U::COPY_DST),
             shade: buf("shade params", size_of::<ShadeParams>() as u64, U::UNIFORM | U::COPY_DST),
             trace_params: buf("trace params", size_of::<GridParams>() as u64, U::UNIFORM | U::COPY_DST),
-            rays: buf("primary rays (tile)", n * 32, storage),
-            hits: buf("primary hits (tile)", n * 16, storage | U::COPY_SRC),
-            stats: buf("primary stats (tile)", n * 8, storage | U::COPY_SRC),
-            shadow_rays: buf("shadow rays (tile)", n * 32, storage),
-            shadow_hits: buf("shadow hits (tile)", n * 16, storage),
-            shadow_stats: buf("shadow stats (tile)", n * 8, storage),
-            pixels: buf("pixels (tile)", n * 4, storage | U::COPY_SRC),
+            rays: buf("primary rays (tile)", n * RAY_BYTES, storage),
+            hits: buf("primary hits (tile)", n * HIT_BYTES, storage | U::COPY_SRC),
+            stats: buf("primary stats (tile)", n * STATS_BYTES, storage | U::COPY_SRC),
+            shadow_rays: buf("shadow rays (tile)", n * RAY_BYTES, storage),
+            shadow_hits: buf("shadow hits (tile)", n * HIT_BYTES, storage),
+            shadow_stats: buf("shadow stats (tile)", n * STATS_BYTES, storage),
+            pixels: buf("pixels (tile)", n * PIXEL_BYTES, storage | U::COPY_SRC),
             totals: buf("frame totals", size_of::<FrameTotals>() as u64, storage | U::COPY_SRC | U::COPY_DST),
             totals_read: buf("frame totals readback", size_of::<FrameTotals>() as u64, U::MAP_READ | U::COPY_DST),
             texture,
@@ -342,7 +307,7 @@ impl Renderer {
             pass.dispatch_workgroups(groups, 1, 1);
         };
         let r = |buf, stride| range(buf, 0, count, stride);
-        let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), r(&t.rays, 32), b(&t.shade)]);
+        let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), r(&t.rays, RAY_BYTES), b(&t.shade)]);
         run(enc, &self.camera, &camera_bg, "camera rays");
         let primary = TraceBuffers {
             params: &t.trace_params,
@@ -358,7 +323,7 @@ impl Renderer {
             let shadow_bg = bind(
                 &self.shadow,
                 "shadow bind group",
-                &[b(&t.shade), r(&t.rays, 32), r(&t.hits, 16), r(&t.shadow_rays, 32)],
+                &[b(&t.shade), r(&t.rays, RAY_BYTES), r(&t.hits, HIT_BYTES), r(&t.shadow_rays, RAY_BYTES)],
             );
             run(enc, &self.shadow, &shadow_bg, "shadow rays");
             let shadow = TraceBuffers {
@@ -377,12 +342,12 @@ impl Renderer {
             "shade bind group",
             &[
                 b(&t.shade),
-                r(&t.rays, 32),
-                r(&t.hits, 16),
-                r(&t.stats, 8),
-                r(&t.shadow_hits, 16),
+                r(&t.rays, RAY_BYTES),
+                r(&t.hits, HIT_BYTES),
+                r(&t.stats, STATS_BYTES),
+                r(&t.shadow_hits, HIT_BYTES),
                 b(&scene.triangles),
-                r(&t.pixels, 4),
+                r(&t.pixels, PIXEL_BYTES),
             ],
         );
         run(enc, &self.shade, &shade_bg, "shade");
@@ -399,9 +364,9 @@ impl Renderer {
                 "present bind group",
                 &[
                     b(&t.shade),
-                    r(&t.pixels, 4),
-                    r(&t.hits, 16),
-                    r(&t.stats, 8),
+                    r(&t.pixels, PIXEL_BYTES),
+                    r(&t.hits, HIT_BYTES),
+                    r(&t.stats, STATS_BYTES),
                     b(&t.totals),
                     wgpu::BindingResource::TextureView(&view),
                 ],
@@ -435,9 +400,9 @@ impl Renderer {
                 mapped_at_creation: false,
             })
         };
-        let pixels_read = read("pixels readback", cap * 4);
-        let hits_read = read("hits readback", cap * 16);
-        let stats_read = read("stats readback", cap * 8);
+        let pixels_read = read("pixels readback", cap * PIXEL_BYTES);
+        let hits_read = read("hits readback", cap * HIT_BYTES);
+        let stats_read = read("stats readback", cap * STATS_BYTES);
         let mut frame = Frame {
             width: o.width,
             height: o.height,
@@ -450,13 +415,13 @@ impl Renderer {
             let count = cap.min(n - first);
             let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render tile") });
             self.encode_tile(ctx, &mut enc, scene, s, bounds, o, &t, first as u32, count as u32)?;
-            enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, count * 4);
-            enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, count * 16);
-            enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, count * 8);
+            enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, count * PIXEL_BYTES);
+            enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, count * HIT_BYTES);
+            enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, count * STATS_BYTES);
             ctx.queue.submit([enc.finish()]);
-            let px: Vec<u32> = read_back(ctx, &pixels_read, count * 4, "pixels")?;
-            let h: Vec<GpuHit> = read_back(ctx, &hits_read, count * 16, "hits")?;
-            let st: Vec<GpuRayStats> = read_back(ctx, &stats_read, count * 8, "ray stats")?;
+            let px: Vec<u32> = read_back(ctx, &pixels_read, count * PIXEL_BYTES, "pixels")?;
+            let h: Vec<GpuHit> = read_back(ctx, &hits_read, count * HIT_BYTES, "hits")?;
+            let st: Vec<GpuRayStats> = read_back(ctx, &stats_read, count * STATS_BYTES, "ray stats")?;
             ctx.check_device()?;
             frame.rgba.extend(px.iter().flat_map(|p| p.to_le_bytes()));
             frame.hits.extend(h.iter().map(|h| Hit { t: h.t, triangle: h.triangle, u: h.u, v: h.v }));

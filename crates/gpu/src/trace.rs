@@ -11,7 +11,7 @@ use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
 use crate::kernel::{GpuWalker, Kernel};
-use crate::layout::{GpuRay, GpuRayStats, GridParams};
+use crate::layout::{GpuRay, GpuRayStats, GridParams, HIT_BYTES, RAY_BYTES, STATS_BYTES};
 use crate::shaders::compose_with;
 use crate::upload::{GpuScene, GpuStructure};
 
@@ -91,11 +91,15 @@ impl Scratch {
         let n = capacity as u64;
         Scratch {
             capacity,
-            rays: buf("rays", n * 32, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST),
-            hits: buf("hits", n * 16, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC),
-            stats: buf("ray stats", n * 8, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC),
-            hits_read: buf("hits readback", n * 16, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
-            stats_read: buf("stats readback", n * 8, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
+            rays: buf("rays", n * RAY_BYTES, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST),
+            hits: buf("hits", n * HIT_BYTES, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC),
+            stats: buf("ray stats", n * STATS_BYTES, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC),
+            hits_read: buf("hits readback", n * HIT_BYTES, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
+            stats_read: buf(
+                "stats readback",
+                n * STATS_BYTES,
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            ),
             params: ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("trace params"),
                 contents: bytemuck::bytes_of(&GridParams::default()),
@@ -149,9 +153,9 @@ impl Tracer {
         let pipe = self.pipeline(ctx, Kernel::for_kind(s.kind), b.walker)?;
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: range(b.rays, b.first, b.count, 32) },
-            wgpu::BindGroupEntry { binding: 2, resource: range(b.hits, b.first, b.count, 16) },
-            wgpu::BindGroupEntry { binding: 3, resource: range(b.stats, b.first, b.count, 8) },
+            wgpu::BindGroupEntry { binding: 1, resource: range(b.rays, b.first, b.count, RAY_BYTES) },
+            wgpu::BindGroupEntry { binding: 2, resource: range(b.hits, b.first, b.count, HIT_BYTES) },
+            wgpu::BindGroupEntry { binding: 3, resource: range(b.stats, b.first, b.count, STATS_BYTES) },
             wgpu::BindGroupEntry { binding: 4, resource: scene.triangles.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 5, resource: s.refs.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 6, resource: s.cells.as_entire_binding() },
@@ -232,7 +236,7 @@ impl Tracer {
                 walker,
             };
             self.encode(ctx, &mut enc, scene, s, &tb)?;
-            let (hit_bytes, stat_bytes) = (count as u64 * 16, count as u64 * 8);
+            let (hit_bytes, stat_bytes) = (count as u64 * HIT_BYTES, count as u64 * STATS_BYTES);
             enc.copy_buffer_to_buffer(&b.hits, 0, &b.hits_read, 0, hit_bytes);
             enc.copy_buffer_to_buffer(&b.stats, 0, &b.stats_read, 0, stat_bytes);
             ctx.queue.submit([enc.finish()]);

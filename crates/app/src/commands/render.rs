@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
-use gridrt_gpu::{RenderOptions, Renderer, View};
+use gridrt_gpu::{RenderOptions, Renderer};
 use gridrt_scene::Camera;
 
 use super::build_grid;
@@ -62,7 +62,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         n / ms / 1e3,
         b.times.total()
     );
-    if matches!(args.view, View::HeatmapCells | View::HeatmapTests) {
+    if args.view.is_heatmap() {
         println!(
             "colour scale: 0 black, {:.0} blue, {:.0} cyan, {:.0} green, {:.0} yellow, {:.0} red, >= {:.0} white",
             args.heat_max / 6.0,

@@ -131,8 +131,8 @@ impl GridrtApp {
         if let Some(k) = args.grid {
             settings.grid.kind = k;
         }
-        if let Some(v) = &args.view {
-            settings.view = v.name().into();
+        if let Some(v) = args.view {
+            settings.view = v;
         }
         if let Some(t) = args.traversal {
             settings.traversal = t;
@@ -199,16 +199,12 @@ impl GridrtApp {
         app
     }
 
-    fn view(&self) -> View {
-        self.settings.view.parse().unwrap_or_default()
-    }
-
     fn render_options(&self, camera: Camera, size: [u32; 2]) -> RenderOptions {
         RenderOptions {
             width: size[0],
             height: size[1],
             camera,
-            view: self.view(),
+            view: self.settings.view,
             traversal: self.settings.traversal,
             mailbox: self.settings.mailbox,
             heat_max: self.settings.heat_max,
@@ -271,7 +267,7 @@ impl GridrtApp {
         }
         let key = RenderKey {
             camera: self.orbit.camera(),
-            view: self.view(),
+            view: self.settings.view,
             traversal: self.settings.traversal,
             mailbox: self.settings.mailbox,
             heat_max: self.settings.heat_max,

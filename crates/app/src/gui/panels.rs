@@ -197,14 +197,14 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
 
     ui.separator();
     ui.heading("View");
-    egui::ComboBox::from_label("view").selected_text(s.view.as_str()).show_ui(ui, |ui| {
+    egui::ComboBox::from_label("view").selected_text(s.view.name()).show_ui(ui, |ui| {
         for v in View::ALL {
-            ui.selectable_value(&mut s.view, v.name().to_string(), v.name());
+            ui.selectable_value(&mut s.view, v, v.name());
         }
     });
-    if s.view.starts_with("heatmap") {
+    if s.view.is_heatmap() {
         ui.add(egui::Slider::new(&mut s.heat_max, 1.0..=4096.0).logarithmic(true).text("scale top"));
-        legend(ui, s.heat_max, if s.view == "heatmap-cells" { "cells visited" } else { "triangle tests" });
+        legend(ui, s.heat_max, if s.view == View::HeatmapCells { "cells visited" } else { "triangle tests" });
     }
     ui.add(egui::Slider::new(&mut s.render_scale, 0.1..=1.0).text("render scale"))
         .on_hover_text("Rendered pixels per screen pixel: lower is faster on a software adapter.");

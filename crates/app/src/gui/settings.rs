@@ -2,6 +2,7 @@
 //! view options. The scene is not remembered: the app always opens on the default scene or
 //! on the file named on the command line.
 
+use gridrt_gpu::View;
 use gridrt_grid::{GridConfig, Traversal};
 use serde::{Deserialize, Serialize};
 
@@ -15,8 +16,8 @@ pub struct Settings {
     pub grid: GridConfig,
     pub traversal: Traversal,
     pub mailbox: bool,
-    /// View name (`gridrt_gpu::View::name`).
-    pub view: String,
+    /// What the image shows (stored by name, e.g. "heatmap-cells").
+    pub view: View,
     /// Count at the top of the heatmap colour scale.
     pub heat_max: f32,
     /// Rendered pixels per screen pixel (the software adapter is slow: below 1 keeps it fluid).
@@ -32,7 +33,7 @@ impl Default for Settings {
             grid: GridConfig::default(),
             traversal: Traversal::AmanatidesWoo,
             mailbox: true,
-            view: "shaded".into(),
+            view: View::Shaded,
             heat_max: 64.0,
             render_scale: 0.5,
             show_cost_plot: false,
@@ -53,7 +54,7 @@ mod tests {
         s.grid.kind = GridKind::Multires;
         s.grid.resolution = Some(Resolution::Cubic(40));
         s.traversal = Traversal::Liu;
-        s.view = "heatmap-tests".into();
+        s.view = View::HeatmapTests;
         s.explainer.nx = 20;
         let text = serde_json::to_string(&s).unwrap();
         let back: Settings = serde_json::from_str(&text).unwrap();

@@ -101,7 +101,7 @@ impl GridrtApp {
         for c in commands {
             match c {
                 HookCommand::Grid(k) => self.settings.grid.kind = k,
-                HookCommand::View(v) => self.settings.view = v.name().into(),
+                HookCommand::View(v) => self.settings.view = v,
                 HookCommand::Traversal(t) => self.settings.traversal = t,
                 HookCommand::Camera(cam) => match &self.scene {
                     Some(s) => self.orbit = Orbit::from_camera(&cam, &s.loaded.bounds),
