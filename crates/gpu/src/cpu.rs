@@ -44,7 +44,7 @@ pub fn camera_rays(cam: &GpuCamera) -> Vec<Ray> {
 }
 
 /// shaders/present.wgsl's sums over a frame's primary rays.
-pub fn present_totals(hits: &[gridrt_scene::Hit], stats: &[crate::layout::GpuRayStats]) -> crate::layout::FrameTotals {
+pub fn present_totals(hits: &[gridrt_scene::Hit], stats: &[gridrt_grid::RayStats]) -> crate::layout::FrameTotals {
     let cells: u64 = stats.iter().map(|s| s.cells as u64).sum();
     let tests: u64 = stats.iter().map(|s| s.tests as u64).sum();
     let split = |v: u64| [v as u32, (v >> 32) as u32];
@@ -96,7 +96,7 @@ pub fn shade_pixel(
     shade: &crate::layout::ShadeParams,
     primary: &Ray,
     hit: &gridrt_scene::Hit,
-    stats: &crate::layout::GpuRayStats,
+    stats: &gridrt_grid::RayStats,
     shadow_hit: &gridrt_scene::Hit,
     tri: [Vec3; 3],
 ) -> u32 {

@@ -1,15 +1,19 @@
-//! Data the shaders read and write, as `#[repr(C)]` Pod structs.
+//! Data the shaders read and write, as `#[repr(C)]` Pod structs. Hits and per-ray counters are
+//! the CPU's own records (WGSL `Hit` is [`gridrt_scene::Hit`], WGSL `RayStats` is
+//! [`gridrt_grid::RayStats`]), read back without conversion.
 //! Keep in sync with shaders/shared/bindings.wgsl and shaders/shared/hierarchy.wgsl (a test
 //! compares every struct's size and member offsets with naga's layout of the WGSL).
 //! Everything is vec4-aligned: no bare vec3 in storage.
 
 use bytemuck::{Pod, Zeroable};
+use gridrt_grid::RayStats;
+use gridrt_scene::Hit;
 
 /// Bytes per record of the per-ray buffers, from the structs below (one place for every
 /// buffer size and binding range).
 pub const RAY_BYTES: u64 = size_of::<GpuRay>() as u64;
-pub const HIT_BYTES: u64 = size_of::<GpuHit>() as u64;
-pub const STATS_BYTES: u64 = size_of::<GpuRayStats>() as u64;
+pub const HIT_BYTES: u64 = size_of::<Hit>() as u64;
+pub const STATS_BYTES: u64 = size_of::<RayStats>() as u64;
 /// One packed RGBA8 pixel.
 pub const PIXEL_BYTES: u64 = size_of::<u32>() as u64;
 
@@ -19,24 +23,6 @@ pub const PIXEL_BYTES: u64 = size_of::<u32>() as u64;
 pub struct GpuRay {
     pub origin_tmin: [f32; 4],
     pub dir_tmax: [f32; 4],
-}
-
-/// Closest hit (the hit file's record). WGSL `Hit`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuHit {
-    pub t: f32,
-    pub triangle: u32,
-    pub u: f32,
-    pub v: f32,
-}
-
-/// Per-ray counters. WGSL `RayStats`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct GpuRayStats {
-    pub cells: u32,
-    pub tests: u32,
 }
 
 /// Per-dispatch parameters (uniform). WGSL `Params`.

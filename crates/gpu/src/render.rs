@@ -11,14 +11,12 @@
 //! (the app), a last pass (`present.wgsl`) copies each tile's pixels into the full-size texture
 //! and sums the per-ray stats on the GPU, so the app reads back 32 bytes per frame.
 
-use gridrt_grid::Traversal;
+use gridrt_grid::{RayStats, Traversal};
 use gridrt_scene::{Aabb, Camera, Hit};
 
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
-use crate::layout::{
-    FrameTotals, GpuHit, GpuRayStats, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams,
-};
+use crate::layout::{FrameTotals, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams};
 use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, walker_for};
 use crate::upload::{GpuScene, GpuStructure};
 use crate::view::View;
@@ -44,7 +42,7 @@ pub struct Frame {
     /// RGBA8, row-major from the top-left.
     pub rgba: Vec<u8>,
     pub hits: Vec<Hit>,
-    pub stats: Vec<GpuRayStats>,
+    pub stats: Vec<RayStats>,
 }
 
 /// The light the shaded view uses: above and to the side of the scene.
@@ -420,11 +418,11 @@ impl Renderer {
             enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, count * STATS_BYTES);
             ctx.queue.submit([enc.finish()]);
             let px: Vec<u32> = read_back(ctx, &pixels_read, count * PIXEL_BYTES, "pixels")?;
-            let h: Vec<GpuHit> = read_back(ctx, &hits_read, count * HIT_BYTES, "hits")?;
-            let st: Vec<GpuRayStats> = read_back(ctx, &stats_read, count * STATS_BYTES, "ray stats")?;
+            let h: Vec<Hit> = read_back(ctx, &hits_read, count * HIT_BYTES, "hits")?;
+            let st: Vec<RayStats> = read_back(ctx, &stats_read, count * STATS_BYTES, "ray stats")?;
             ctx.check_device()?;
             frame.rgba.extend(px.iter().flat_map(|p| p.to_le_bytes()));
-            frame.hits.extend(h.iter().map(|h| Hit { t: h.t, triangle: h.triangle, u: h.u, v: h.v }));
+            frame.hits.extend(h);
             frame.stats.extend(st);
             first += count;
         }

@@ -5,13 +5,13 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use gridrt_grid::Traversal;
+use gridrt_grid::{RayStats, Traversal};
 use gridrt_scene::{Hit, Ray};
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
 use crate::kernel::{GpuWalker, Kernel};
-use crate::layout::{GpuRay, GpuRayStats, GridParams, HIT_BYTES, RAY_BYTES, STATS_BYTES};
+use crate::layout::{GpuRay, GridParams, HIT_BYTES, RAY_BYTES, STATS_BYTES};
 use crate::shaders::compose_with;
 use crate::upload::{GpuScene, GpuStructure};
 
@@ -51,9 +51,6 @@ pub(crate) fn pipeline_walking(
         cache: None,
     }))
 }
-
-// Hits are read back straight into `Hit`s: the WGSL `Hit` (`GpuHit`) has the same layout.
-const _: () = assert!(std::mem::size_of::<Hit>() == std::mem::size_of::<crate::layout::GpuHit>());
 
 /// Trace pipelines, created on first use per kind, and the buffers of [`Tracer::trace`],
 /// kept between calls.
@@ -185,7 +182,7 @@ impl Tracer {
         rays: &[Ray],
         traversal: Traversal,
         mailbox: bool,
-    ) -> Result<(Vec<Hit>, Vec<GpuRayStats>), GpuError> {
+    ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
         let limits = ctx.device.limits();
         let max_by_binding = limits.max_storage_buffer_binding_size / std::mem::size_of::<GpuRay>() as u64;
         let max_by_dispatch = limits.max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64;
@@ -216,7 +213,7 @@ impl Tracer {
         chunk: usize,
         (walker, mailbox): (GpuWalker, bool),
         b: &Scratch,
-    ) -> Result<(Vec<Hit>, Vec<GpuRayStats>), GpuError> {
+    ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
         let mut hits = Vec::with_capacity(rays.len());
         let mut stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
@@ -248,7 +245,7 @@ impl Tracer {
                 let view = hit_slice.get_mapped_range().map_err(|e| err("hits", &e))?;
                 hits.extend_from_slice(bytemuck::cast_slice::<u8, Hit>(&view));
                 let view = stat_slice.get_mapped_range().map_err(|e| err("ray stats", &e))?;
-                stats.extend_from_slice(bytemuck::cast_slice::<u8, GpuRayStats>(&view));
+                stats.extend_from_slice(bytemuck::cast_slice::<u8, RayStats>(&view));
             }
             b.hits_read.unmap();
             b.stats_read.unmap();

@@ -4,7 +4,9 @@ use serde::Serialize;
 
 /// What one ray cost: cells visited (m in T = Tsetup + m·Tstep + μ·Tinter) and triangle tests
 /// performed (μ; mailboxed skips are not tests).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+/// The same record as WGSL `RayStats` (shaders/shared/types.wgsl): the GPU writes these.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct RayStats {
     pub cells: u32,
     pub tests: u32,

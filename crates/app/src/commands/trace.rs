@@ -37,7 +37,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             let secs = start.elapsed().as_secs_f64();
             let mut stats = BatchStats::default();
             for (h, s) in hits.iter().zip(&st) {
-                stats.add(gridrt_grid::RayStats { cells: s.cells, tests: s.tests }, h.is_hit());
+                stats.add(*s, h.is_hit());
             }
             let label = format!(
                 "{} on the GPU ({}), {}{}",
