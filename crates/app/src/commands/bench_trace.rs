@@ -3,8 +3,7 @@
 
 use std::time::Instant;
 
-use gridrt_gpu::Tracer;
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_gpu::GpuSession;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_scene::Camera;
 use gridrt_scene::rays::{camera_rays, random_rays};
@@ -19,9 +18,8 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let b = mesh.bounds();
     let (grid, build) = build_grid(&tris, &args.grid)?;
     let ctx = super::gpu_context()?;
-    let scene = GpuScene::new(&ctx, &tris)?;
-    let gs = GpuStructure::new(&ctx, &grid)?;
-    let tracer = Tracer::new();
+    let gpu = GpuSession::new(&ctx, &tris, b)?;
+    let gs = gpu.upload(&grid)?;
     let opts = TraceOptions { traversal: args.traversal, mailbox: true };
     let sets =
         [("primary", camera_rays(&Camera::fit(&b, 4.0 / 3.0), args.rays)), ("random", random_rays(&b, args.rays, 1))];
@@ -36,7 +34,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     };
     // Warm-up on a whole set: compiles the pipeline and sizes the tracer's buffers, which a
     // few rays do not (the first full-size call also paid ~0.2 s on lavapipe).
-    tracer.trace(&ctx, &scene, &gs, &sets[0].1, args.traversal, true)?;
+    gpu.trace(&gs, &sets[0].1, args.traversal, true)?;
     let mut rows = Vec::new();
     for (name, rays) in &sets {
         let cpu_s = best(&mut || {
@@ -44,7 +42,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         });
         let mut err = None;
         let gpu_s = best(&mut || {
-            if let Err(e) = tracer.trace(&ctx, &scene, &gs, rays, args.traversal, true) {
+            if let Err(e) = gpu.trace(&gs, rays, args.traversal, true) {
                 err = Some(e);
             }
         });

@@ -1,8 +1,7 @@
 //! `gridrt render SCENE -o out.png`: one GPU frame of any view, written as PNG.
 
 use anyhow::Context;
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
-use gridrt_gpu::{RenderOptions, Renderer};
+use gridrt_gpu::{GpuSession, RenderOptions};
 use gridrt_scene::Camera;
 
 use super::build_grid;
@@ -28,9 +27,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let (grid, b) = build_grid(&tris, &args.grid)?;
     let ctx = super::gpu_context()?;
-    let scene = GpuScene::new(&ctx, &tris)?;
-    let gs = GpuStructure::new(&ctx, &grid)?;
-    let renderer = Renderer::new(&ctx)?;
+    let gpu = GpuSession::new(&ctx, &tris, bounds)?;
+    let gs = gpu.upload(&grid)?;
     let opts = RenderOptions {
         width,
         height,
@@ -41,9 +39,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         heat_max: args.heat_max,
     };
     // Warm-up on a small frame: pipeline compilation stays out of the timing.
-    renderer.render(&ctx, &scene, &gs, &bounds, &RenderOptions { width: 64, height: 48, ..opts })?;
+    gpu.render(&gs, &RenderOptions { width: 64, height: 48, ..opts })?;
     let start = std::time::Instant::now();
-    let frame = renderer.render(&ctx, &scene, &gs, &bounds, &opts)?;
+    let frame = gpu.render(&gs, &opts)?;
     let ms = start.elapsed().as_secs_f64() * 1e3;
     image::save_buffer(&args.output, &frame.rgba, width, height, image::ExtendedColorType::Rgba8)
         .with_context(|| format!("writing {}", args.output.display()))?;

@@ -27,13 +27,12 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         Backend::Gpu => {
             let (grid, b) = build_grid(&tris, &args.grid)?;
             let ctx = super::gpu_context()?;
-            let scene = gridrt_gpu::upload::GpuScene::new(&ctx, &tris)?;
-            let gs = gridrt_gpu::upload::GpuStructure::new(&ctx, &grid)?;
-            let tracer = gridrt_gpu::Tracer::new();
+            let gpu = gridrt_gpu::GpuSession::new(&ctx, &tris, mesh.bounds())?;
+            let gs = gpu.upload(&grid)?;
             // Warm-up (pipeline creation) outside the timing.
-            tracer.trace(&ctx, &scene, &gs, &rays[..rays.len().min(64)], args.traversal, args.mailbox)?;
+            gpu.trace(&gs, &rays[..rays.len().min(64)], args.traversal, args.mailbox)?;
             let start = Instant::now();
-            let (hits, st) = tracer.trace(&ctx, &scene, &gs, &rays, args.traversal, args.mailbox)?;
+            let (hits, st) = gpu.trace(&gs, &rays, args.traversal, args.mailbox)?;
             let secs = start.elapsed().as_secs_f64();
             let mut stats = BatchStats::default();
             for (h, s) in hits.iter().zip(&st) {

@@ -4,20 +4,13 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
-use gridrt_gpu::{GpuContext, Tracer};
+use gridrt_gpu::{GpuContext, GpuSession};
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{GridConfig, GridKind, Resolution, Traversal, structure};
 use gridrt_scene::Ray;
 use serde::Serialize;
 
-/// The GPU side of a sweep (scene uploaded once).
-#[derive(Debug)]
-pub struct Gpu<'a> {
-    pub ctx: &'a GpuContext,
-    pub scene: &'a GpuScene,
-    pub tracer: &'a Tracer,
-}
+use super::scenes::LabScene;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Point {
@@ -50,9 +43,9 @@ pub fn best_of<T>(repeat: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 }
 
 /// The scene on the device when there is one (each experiment uploads once per scene).
-pub fn upload(ctx: Option<&GpuContext>, tris: &[[Vec3; 3]]) -> anyhow::Result<Option<GpuScene>> {
+pub fn session<'a>(ctx: Option<&'a GpuContext>, sc: &LabScene) -> anyhow::Result<Option<GpuSession<'a>>> {
     Ok(match ctx {
-        Some(c) => Some(GpuScene::new(c, tris)?),
+        Some(c) => Some(GpuSession::new(c, &sc.tris, sc.bounds)?),
         None => None,
     })
 }
@@ -68,7 +61,7 @@ pub fn measure(
     tris: &[[Vec3; 3]],
     res: [u32; 3],
     rays: &[Ray],
-    gpu: Option<&Gpu>,
+    gpu: Option<&GpuSession>,
     repeat: usize,
 ) -> anyhow::Result<Point> {
     let cfg = GridConfig { kind: GridKind::Flat, resolution: Some(Resolution::Explicit(res)), ..GridConfig::default() };
@@ -81,7 +74,7 @@ pub fn measure_config(
     tris: &[[Vec3; 3]],
     cfg: &GridConfig,
     rays: &[Ray],
-    gpu: Option<&Gpu>,
+    gpu: Option<&GpuSession>,
     repeat: usize,
 ) -> anyhow::Result<Point> {
     let (grid, report) = structure::build(tris, cfg)?;
@@ -91,10 +84,10 @@ pub fn measure_config(
     let (cpu_s, _) = best_of(repeat, || grid.trace_batch(tris, rays, opts, true));
     let gpu_s = match gpu {
         Some(g) => {
-            let gs = GpuStructure::new(g.ctx, &grid)?;
+            let gs = g.upload(&grid)?;
             // One untimed warm-up (pipeline creation, first upload).
-            g.tracer.trace(g.ctx, g.scene, &gs, &rays[..rays.len().min(64)], opts.traversal, true)?;
-            let (secs, r) = best_of(repeat, || g.tracer.trace(g.ctx, g.scene, &gs, rays, opts.traversal, true));
+            g.trace(&gs, &rays[..rays.len().min(64)], opts.traversal, true)?;
+            let (secs, r) = best_of(repeat, || g.trace(&gs, rays, opts.traversal, true));
             r?;
             Some(secs)
         }

@@ -14,8 +14,7 @@ pub mod scaling;
 pub mod targets;
 
 use glam::Vec3;
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
-use gridrt_gpu::{GpuContext, Tracer};
+use gridrt_gpu::GpuContext;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, Resolution, Traversal, structure};
 use gridrt_scene::rays::{camera_rays, random_rays};
@@ -26,7 +25,7 @@ use serde::Serialize;
 use crate::cli::BenchArgs;
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::lab::scenes::{LabScene, default_scenes, procedural_scenes};
-use crate::lab::sweep::{best_of, machine};
+use crate::lab::sweep::{best_of, machine, session};
 
 /// One structure on one scene.
 #[derive(Clone, Debug, Serialize)]
@@ -209,11 +208,7 @@ fn bench_scene(
     gpu: Option<&GpuContext>,
     pb: &indicatif::ProgressBar,
 ) -> anyhow::Result<Vec<Row>> {
-    let tracer = Tracer::new();
-    let gscene = match gpu {
-        Some(ctx) => Some(GpuScene::new(ctx, &sc.tris)?),
-        None => None,
-    };
+    let gpu = session(gpu, sc)?;
     let mut reference: Option<[Vec<Hit>; 2]> = None;
     let mut rows = Vec::new();
     for subject in Subject::all(!args.no_peers) {
@@ -227,13 +222,11 @@ fn bench_scene(
             let (s, h) = best_of(args.repeat as usize, || built.trace(&sc.tris, rays));
             mrays[i] = rays.len() as f64 / s / 1e6;
             hits[i] = h;
-            if let (Built::Grid(g, _), Some(ctx), Some(scene)) = (&built, gpu, gscene.as_ref()) {
-                let gs = GpuStructure::new(ctx, g)?;
+            if let (Built::Grid(g, _), Some(gpu)) = (&built, gpu.as_ref()) {
+                let gs = gpu.upload(g)?;
                 // Untimed warm-up: pipeline creation and first upload.
-                tracer.trace(ctx, scene, &gs, &rays[..rays.len().min(64)], Traversal::AmanatidesWoo, true)?;
-                let (s, r) = best_of(args.repeat as usize, || {
-                    tracer.trace(ctx, scene, &gs, rays, Traversal::AmanatidesWoo, true)
-                });
+                gpu.trace(&gs, &rays[..rays.len().min(64)], Traversal::AmanatidesWoo, true)?;
+                let (s, r) = best_of(args.repeat as usize, || gpu.trace(&gs, rays, Traversal::AmanatidesWoo, true));
                 r?;
                 gpu_mrays[i] = Some(rays.len() as f64 / s / 1e6);
             }

@@ -15,7 +15,6 @@
 use std::time::Instant;
 
 use glam::{UVec3, Vec3};
-use gridrt_gpu::Tracer;
 use gridrt_grid::geometry::GridRay;
 use gridrt_grid::ray::PreparedRay;
 use gridrt_grid::resolution::sample_curve;
@@ -29,7 +28,7 @@ use crate::cli::ExperimentArgs;
 use crate::config::calibration::{Calibration, Fit};
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::lab::scenes::{mixed_rays, pick_scenes};
-use crate::lab::sweep::{Gpu, machine, measure_config, upload};
+use crate::lab::sweep::{machine, measure_config, session};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -146,7 +145,6 @@ fn micro_cpu() -> (f64, f64) {
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(args)?;
     let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
-    let tracer = Tracer::new();
     let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
     let flat_samples = if args.quick { 3 } else { 6 };
     let pb = progress((scenes.len() * (flat_samples + 4)) as u64, "constants");
@@ -154,8 +152,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     for sc in &scenes {
         pb.set_message(sc.name.clone());
         let rays = mixed_rays(&sc.bounds, rays_n, 5);
-        let gscene = upload(ctx.as_ref(), &sc.tris)?;
-        let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
+        let gpu = session(ctx.as_ref(), sc)?;
         let model = CostModel { samples: flat_samples as u32, ..CostModel::default() };
         let mut configs: Vec<(String, GridConfig)> =
             sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true)

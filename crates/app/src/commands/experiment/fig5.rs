@@ -9,7 +9,6 @@
 //! Scenes: from `--scenes DIR` (its manifest.json kinds: the two largest scanned models, the
 //! largest architectural one, the particles and the slivers), else procedural stand-ins.
 
-use gridrt_gpu::Tracer;
 use gridrt_grid::resolution::{best_sample, cubic_cells, sample_curve, samples_at};
 use gridrt_grid::{CostModel, InsertMode};
 use serde::Serialize;
@@ -17,7 +16,7 @@ use serde::Serialize;
 use crate::cli::ExperimentArgs;
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::lab::scenes::{mixed_rays, pick_scenes};
-use crate::lab::sweep::{Gpu, Point, machine, measure, upload};
+use crate::lab::sweep::{Point, machine, measure, session};
 
 /// Sweep points below the survey's interval (down to half its low end).
 const BELOW: usize = 4;
@@ -54,7 +53,6 @@ pub struct Summary {
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(args)?;
     let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
-    let tracer = Tracer::new();
     // The constants the command line's auto resolution uses: the calibration when saved.
     let (model, note) = crate::config::calibration::active_cost_model();
     eprintln!("fig5: cost model with {note}");
@@ -66,8 +64,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         pb.set_message(sc.name.clone());
         // Half primary rays (from the auto camera), half random rays, as one set.
         let rays = mixed_rays(&sc.bounds, rays_n, 3);
-        let gscene = upload(ctx.as_ref(), &sc.tris)?;
-        let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
+        let gpu = session(ctx.as_ref(), sc)?;
         let interval = sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true);
         let auto = best_sample(&interval).expect("a sample").resolution;
         // The measured optimum often sits at or below the interval's low end, (2N·Tinter/Tstep)^⅓:

@@ -2,14 +2,13 @@
 //! proximity clouds on every scene kind: build ms, memory, cells visited, triangle tests and
 //! Mrays/s on the CPU (all threads) and the GPU, on the same rays (half primary, half random).
 
-use gridrt_gpu::Tracer;
 use gridrt_grid::{GridConfig, GridKind};
 use serde::Serialize;
 
 use crate::cli::ExperimentArgs;
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::lab::scenes::{mixed_rays, pick_scenes};
-use crate::lab::sweep::{Gpu, machine, measure_config, upload};
+use crate::lab::sweep::{machine, measure_config, session};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -32,15 +31,13 @@ type Metric = (&'static str, &'static str, bool, fn(&Row) -> Option<f64>);
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(args)?;
     let ctx = if args.no_gpu { None } else { Some(crate::commands::gpu_context()?) };
-    let tracer = Tracer::new();
     let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
     let pb = progress((scenes.len() * GridKind::ALL.len()) as u64, "hierarchy");
     let mut rows = Vec::new();
     for sc in &scenes {
         pb.set_message(sc.name.clone());
         let rays = mixed_rays(&sc.bounds, rays_n, 3);
-        let gscene = upload(ctx.as_ref(), &sc.tris)?;
-        let gpu = ctx.as_ref().zip(gscene.as_ref()).map(|(ctx, scene)| Gpu { ctx, scene, tracer: &tracer });
+        let gpu = session(ctx.as_ref(), sc)?;
         for kind in GridKind::ALL {
             let cfg = GridConfig { kind, ..GridConfig::default() };
             let p = measure_config(&sc.tris, &cfg, &rays, gpu.as_ref(), 2)?;
