@@ -4,6 +4,7 @@
 use eframe::egui::{self, Key, PointerButton};
 
 use super::GridrtApp;
+use super::errors::ErrorKind;
 use super::jobs::SceneSource;
 use super::orbit::Orbit;
 
@@ -84,7 +85,7 @@ impl GridrtApp {
                 },
             );
         if let Err(e) = result {
-            self.error = Some(format!("saving {}: {e}", path.display()));
+            self.errors.report(ErrorKind::Other, format!("saving {}: {e}", path.display()));
         }
     }
 
@@ -181,7 +182,7 @@ impl GridrtApp {
             self.dropped = None;
             match r {
                 Ok((name, bytes)) => self.open(ctx, SceneSource::Bytes { name, bytes: bytes.into() }),
-                Err(e) => self.error = Some(format!("reading the dropped file: {e}")),
+                Err(e) => self.errors.report(ErrorKind::Other, format!("reading the dropped file: {e}")),
             }
         }
     }

@@ -6,6 +6,7 @@ use eframe::egui;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 
 use super::GridrtApp;
+use super::errors::ErrorKind;
 use super::jobs::{self, Job, LoadedScene, SceneSource};
 use super::orbit::Orbit;
 use crate::gui::built::Built;
@@ -41,12 +42,12 @@ impl GridrtApp {
             match r.and_then(|r| r) {
                 Ok(loaded) => {
                     if let Err(e) = self.set_scene(loaded) {
-                        self.error = Some(e.clone());
+                        self.errors.report(ErrorKind::Other, e.clone());
                         self.fail_smoke(ctx, e);
                     }
                 }
                 Err(e) => {
-                    self.error = Some(e.clone());
+                    self.errors.report(ErrorKind::Other, e.clone());
                     self.fail_smoke(ctx, e);
                 }
             }
@@ -59,7 +60,7 @@ impl GridrtApp {
                 Ok(b) if Some(b.scene_generation) == self.scene.as_ref().map(|s| s.generation) => self.set_built(b),
                 Ok(_) => {} // built for a scene that has been replaced since
                 Err(e) => {
-                    self.build_error = Some((self.settings.grid, e.clone()));
+                    self.errors.report(ErrorKind::Build(self.settings.grid), e.clone());
                     self.fail_smoke(ctx, e);
                 }
             }
@@ -71,9 +72,9 @@ impl GridrtApp {
         {
             let want = self.settings.grid;
             let have = self.built.as_ref().map(|b| (b.built.scene_generation, b.built.config));
-            let failed = self.build_error.as_ref().is_some_and(|(c, _)| *c == want);
+            let failed = self.errors.build_failed(&want);
             if have != Some((scene.generation, want)) && !failed {
-                self.build_error = None;
+                self.errors.clear_build();
                 let tris = scene.loaded.tris.clone();
                 let generation = scene.generation;
                 self.build_job = Some(jobs::spawn_build(ctx, tris, want, generation));
@@ -83,7 +84,7 @@ impl GridrtApp {
             self.measure_at_start = false;
             if !self.start_measurement() {
                 let why = "--measure: the structure has no sampled cost curve (use a flat or macrocell grid with auto resolution)";
-                self.error = Some(why.into());
+                self.errors.report(ErrorKind::Other, why);
                 self.fail_smoke(ctx, why.into());
             }
         }
@@ -109,7 +110,7 @@ impl GridrtApp {
         };
         self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
         self.measurement = Default::default();
-        self.build_error = None;
+        self.errors.clear_build();
         Ok(())
     }
 
@@ -120,10 +121,10 @@ impl GridrtApp {
                 Ok(s) => Some(s),
                 Err(e) => {
                     // The previous structure stays on screen; this configuration is not retried.
-                    self.build_error = Some((
-                        built.config,
+                    self.errors.report(
+                        ErrorKind::Build(built.config),
                         format!("uploading the {} grid: {e} (the previous one stays)", built.config.kind),
-                    ));
+                    );
                     return;
                 }
             },

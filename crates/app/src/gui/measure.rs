@@ -10,6 +10,7 @@ use gridrt_grid::{GridConfig, GridKind, Resolution};
 use super::GridrtApp;
 use super::built::{Built, build_structure};
 use super::cost_plot;
+use super::errors::ErrorKind;
 use super::jobs::Job;
 
 impl GridrtApp {
@@ -38,7 +39,7 @@ impl GridrtApp {
             match r.and_then(|r| r) {
                 Ok(b) => self.time_frame(&b),
                 Err(e) => {
-                    self.error = Some(e);
+                    self.errors.report(ErrorKind::Other, e);
                     self.measurement.pending.clear();
                 }
             }
@@ -64,7 +65,7 @@ impl GridrtApp {
         let s = match GpuStructure::new(&gpu.ctx, &b.grid) {
             Ok(s) => s,
             Err(e) => {
-                self.error = Some(e.to_string());
+                self.errors.report(ErrorKind::Other, e.to_string());
                 return;
             }
         };
@@ -76,7 +77,7 @@ impl GridrtApp {
             }
             Err(e) => {
                 self.viewport.cancel();
-                self.error = Some(e.to_string());
+                self.errors.report(ErrorKind::Other, e.to_string());
             }
         }
         // The measured frame replaced the image: render the real structure again.
@@ -87,6 +88,6 @@ impl GridrtApp {
     pub(super) fn time_frame(&mut self, _b: &Built) {
         // Timing needs a blocking wait, which the browser does not allow.
         self.measurement.pending.clear();
-        self.error = Some("frame-time measurement is not available in the browser".into());
+        self.errors.report(ErrorKind::Other, "frame-time measurement is not available in the browser");
     }
 }

@@ -8,6 +8,7 @@
 
 pub mod built;
 pub mod cost_plot;
+pub mod errors;
 pub mod explainer;
 pub mod hook;
 mod input;
@@ -26,12 +27,12 @@ use std::sync::{Arc, Mutex};
 
 use eframe::egui::{self, Sense, Vec2};
 use gridrt_gpu::{RenderOptions, View};
-use gridrt_grid::GridConfig;
 use gridrt_scene::Camera;
 use web_time::Instant;
 
 use crate::cli::AppArgs;
 use built::Built;
+use errors::{ErrorKind, Errors};
 use hook::Hook;
 use jobs::{Job, LoadedScene, SceneSource};
 use lifecycle::{BuiltState, SceneState};
@@ -59,7 +60,6 @@ pub struct GridrtApp {
     settings: Settings,
     smoke: Option<Smoke>,
     gpu: Option<Gpu>,
-    gpu_error: Option<String>,
     scene: Option<SceneState>,
     scene_generation: u64,
     scene_job: Option<Job<Result<LoadedScene, String>>>,
@@ -69,9 +69,8 @@ pub struct GridrtApp {
     orbit: Orbit,
     viewport: Viewport,
     last_key: Option<RenderKey>,
-    /// A load or build error, shown until dismissed; the previous scene stays.
-    error: Option<String>,
-    build_error: Option<(GridConfig, String)>,
+    /// Every error shown (load, build, GPU, render); the previous scene and structure stay.
+    errors: Errors,
     measurement: cost_plot::Measurement,
     measure_job: Option<Job<Result<Built, String>>>,
     /// `--camera`: used for the first scene instead of framing it.
@@ -152,18 +151,24 @@ impl GridrtApp {
                 crate::cli::AppWindow::Explainer => settings.show_explainer = true,
             }
         }
-        let (gpu, gpu_error) = match cc.wgpu_render_state.as_ref() {
+        let mut errors = Errors::default();
+        let gpu = match cc.wgpu_render_state.as_ref() {
             Some(rs) => match Gpu::new(rs, &cc.egui_ctx) {
-                Ok(g) => (Some(g), None),
-                Err(e) => (None, Some(format!("GPU setup failed: {e}"))),
+                Ok(g) => Some(g),
+                Err(e) => {
+                    errors.report(ErrorKind::Gpu, format!("GPU setup failed: {e}"));
+                    None
+                }
             },
-            None => (None, Some("eframe started without a wgpu device".to_string())),
+            None => {
+                errors.report(ErrorKind::Gpu, "eframe started without a wgpu device");
+                None
+            }
         };
         let mut app = GridrtApp {
             settings,
             smoke,
             gpu,
-            gpu_error,
             scene: None,
             scene_generation: 0,
             scene_job: None,
@@ -173,8 +178,7 @@ impl GridrtApp {
             orbit: Orbit::fit(&gridrt_scene::Aabb::from_points(&[glam::Vec3::ZERO, glam::Vec3::ONE]), 1.5),
             viewport: Viewport::default(),
             last_key: None,
-            error: None,
-            build_error: None,
+            errors,
             measurement: Default::default(),
             measure_job: None,
             initial_camera: args.camera,
@@ -281,11 +285,18 @@ impl GridrtApp {
             self.viewport.start(&self.render_options(key.camera, size));
             self.last_key = Some(key);
         }
-        if let Err(e) =
-            self.viewport.step(gpu, gs, s, &scene.loaded.bounds).and_then(|done| gpu.ctx.check_device().map(|()| done))
+        match self
+            .viewport
+            .step(gpu, gs, s, &scene.loaded.bounds)
+            .and_then(|done| gpu.ctx.check_device().map(|()| done))
         {
-            self.viewport.cancel();
-            self.viewport.error = Some(e.to_string());
+            // A finished frame ends an earlier render error.
+            Ok(true) => self.errors.clear(|k| *k == ErrorKind::Render),
+            Ok(false) => {}
+            Err(e) => {
+                self.viewport.cancel();
+                self.errors.report(ErrorKind::Render, e.to_string());
+            }
         }
         self.frame_current = true;
         if self.viewport.busy() {
@@ -327,18 +338,13 @@ impl eframe::App for GridrtApp {
                 building,
                 self.viewport.last.as_ref(),
             );
-            for e in [&self.gpu_error, &self.viewport.error].into_iter().flatten() {
+            let mut dismissable = false;
+            for (kind, e) in self.errors.iter() {
                 ui.colored_label(ui.visuals().error_fg_color, e);
+                dismissable |= *kind == ErrorKind::Other;
             }
-            if let Some((_, e)) = &self.build_error {
-                ui.colored_label(ui.visuals().error_fg_color, e);
-            }
-            if let Some(e) = self.error.clone() {
-                ui.separator();
-                ui.colored_label(ui.visuals().error_fg_color, e);
-                if ui.button("dismiss").clicked() {
-                    self.error = None;
-                }
+            if dismissable && ui.button("dismiss").clicked() {
+                self.errors.clear(|k| *k == ErrorKind::Other);
             }
         });
         egui::CentralPanel::default().show(ui, |ui| self.central(ui));

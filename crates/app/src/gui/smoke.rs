@@ -8,6 +8,7 @@ use std::sync::{Arc, Mutex};
 use eframe::egui;
 use web_time::Instant;
 
+use super::errors::ErrorKind;
 use super::hook::{CapturedFrame, Hook, HookCommand, HookStats};
 use super::jobs::SceneSource;
 use super::orbit::Orbit;
@@ -110,10 +111,7 @@ impl GridrtApp {
                 HookCommand::FrameSize(size) => self.frame_size = size,
                 HookCommand::Open { name, bytes } => self.open(ctx, SceneSource::Bytes { name, bytes }),
                 HookCommand::Capture(id) => self.captures.push_back(id),
-                HookCommand::DismissError => {
-                    self.error = None;
-                    self.viewport.error = None;
-                }
+                HookCommand::DismissError => self.errors.clear(|k| matches!(k, ErrorKind::Other | ErrorKind::Render)),
             }
         }
     }
@@ -155,7 +153,7 @@ impl GridrtApp {
                     self.capture = None;
                 }
                 Some(Err(e)) => {
-                    self.error = Some(format!("reading the frame back: {e}"));
+                    self.errors.report(ErrorKind::Other, format!("reading the frame back: {e}"));
                     self.capture = None;
                 }
                 None => {}
@@ -180,12 +178,7 @@ impl GridrtApp {
             building: self.build_job.is_some(),
             worker_builds: self.worker_builds,
             idle: self.idle() && self.captures.is_empty() && self.capture.is_none(),
-            error: [&self.error, &self.gpu_error, &self.viewport.error]
-                .into_iter()
-                .flatten()
-                .cloned()
-                .chain(self.build_error.as_ref().map(|(_, e)| e.clone()))
-                .reduce(|a, b| format!("{a}; {b}")),
+            error: self.errors.joined(),
             first_frame_ms: self.first_frame_ms,
         };
         self.hook.lock().expect("hook lock").stats = stats;

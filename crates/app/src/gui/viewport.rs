@@ -122,7 +122,6 @@ pub struct Viewport {
     pub last: Option<FrameStats>,
     /// Frames completed since start.
     pub frames_done: u64,
-    pub error: Option<String>,
 }
 
 impl Default for Viewport {
@@ -138,7 +137,6 @@ impl Default for Viewport {
             waiter: None,
             last: None,
             frames_done: 0,
-            error: None,
         }
     }
 }
@@ -237,7 +235,6 @@ impl Viewport {
                     view: f.opts.view,
                 });
                 self.frames_done += 1;
-                self.error = None;
                 completed = true;
                 self.show_target(gpu);
             }
