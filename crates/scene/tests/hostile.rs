@@ -208,22 +208,24 @@ fn corpus() -> Vec<Case> {
         },
         over_budget,
     ));
+    // A huge sparse accessor appended to the rich document, and `point` aiming a field at it.
+    let with_sparse = |count: u64, kind: &'static str, point: fn(&mut Value, usize)| {
+        rich_with(move |j| {
+            let n = j["accessors"].as_array().unwrap().len();
+            j["accessors"].as_array_mut().unwrap().push(sparse_accessor(count, kind));
+            point(j, n);
+        })
+    };
     c.push(err(
         "morph-target bomb (4096 targets × 1M vertices)",
-        rich_with(|j| {
-            let n = j["accessors"].as_array().unwrap().len();
-            j["accessors"].as_array_mut().unwrap().push(sparse_accessor(1_000_000, "VEC3"));
+        with_sparse(1_000_000, "VEC3", |j, n| {
             j["meshes"][0]["primitives"][0]["targets"] = Value::Array(vec![json!({"POSITION": n}); 4096]);
         }),
         over_budget,
     ));
     c.push(err(
         "animation-key bomb (10^9 keys)",
-        rich_with(|j| {
-            let n = j["accessors"].as_array().unwrap().len();
-            j["accessors"].as_array_mut().unwrap().push(sparse_accessor(1_000_000_000, "SCALAR"));
-            j["animations"][0]["samplers"][0]["input"] = json!(n);
-        }),
+        with_sparse(1_000_000_000, "SCALAR", |j, n| j["animations"][0]["samplers"][0]["input"] = json!(n)),
         over_budget,
     ));
     c.push(err(

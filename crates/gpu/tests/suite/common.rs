@@ -3,7 +3,8 @@
 
 use std::sync::OnceLock;
 
-use gridrt_gpu::GpuContext;
+use glam::Vec3;
+use gridrt_gpu::{GpuContext, GpuSession};
 
 /// The device, or `None` when GPU tests are explicitly skipped.
 pub fn gpu() -> Option<&'static GpuContext> {
@@ -19,4 +20,12 @@ pub fn gpu() -> Option<&'static GpuContext> {
         }
         Err(e) => panic!("no usable GPU adapter: {e}\n(install mesa-vulkan-drivers for lavapipe, or set GRIDRT_SKIP_GPU_TESTS=1 to skip GPU tests explicitly)"),
     }))
+}
+
+/// The embedded default scene on the test device: its triangles and a session over them.
+pub fn default_scene(ctx: &'static GpuContext) -> (Vec<[Vec3; 3]>, GpuSession<'static>) {
+    let (mesh, _) = gridrt_scene::load_default();
+    let tris = mesh.triangles();
+    let session = GpuSession::new(ctx, &tris, mesh.bounds()).unwrap();
+    (tris, session)
 }

@@ -4,29 +4,25 @@
 use gridrt_gpu::cpu::{camera_rays, gpu_camera, present_totals, shade_pixel, shadow_ray};
 use gridrt_gpu::render::{MAX_TILE_PIXELS, shade_params, tile_limit};
 use gridrt_gpu::trace::{read_back, tile_quantum};
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
-use gridrt_gpu::{FrameTarget, RenderOptions, Renderer, View};
+use gridrt_gpu::{FrameTarget, RenderOptions, View};
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{GridConfig, GridKind, Traversal, structure};
 use gridrt_scene::Camera;
 
-use super::common::gpu;
+use super::common::{default_scene, gpu};
 
 #[test]
 fn default_scene_renders_deterministically_and_matches_the_cpu() {
     let Some(ctx) = gpu() else { return };
-    let (mesh, _) = gridrt_scene::load_default();
-    let tris = mesh.triangles();
-    let bounds = mesh.bounds();
+    let (tris, gpu) = default_scene(ctx);
+    let bounds = gpu.bounds;
     let (w, h) = (320, 240);
     let camera = Camera::fit(&bounds, w as f32 / h as f32);
-    let renderer = Renderer::new(ctx).unwrap();
-    let scene = GpuScene::new(ctx, &tris).unwrap();
     let cpu_rays = camera_rays(&gpu_camera(&camera, w, h));
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
     for kind in GridKind::ALL {
         let (grid, _) = structure::build(&tris, &GridConfig { kind, ..GridConfig::default() }).unwrap();
-        let gs = GpuStructure::new(ctx, &grid).unwrap();
+        let gs = gpu.upload(&grid).unwrap();
         let opts = RenderOptions {
             width: w,
             height: h,
@@ -36,8 +32,8 @@ fn default_scene_renders_deterministically_and_matches_the_cpu() {
             mailbox: true,
             heat_max: 64.0,
         };
-        let a = renderer.render(ctx, &scene, &gs, &bounds, &opts).unwrap();
-        let b = renderer.render(ctx, &scene, &gs, &bounds, &opts).unwrap();
+        let a = gpu.render(&gs, &opts).unwrap();
+        let b = gpu.render(&gs, &opts).unwrap();
         assert_eq!(a.rgba, b.rgba, "{kind}: two renders differ");
         let (cpu_hits, _) = grid.trace_batch(
             &tris,
@@ -61,7 +57,7 @@ fn default_scene_renders_deterministically_and_matches_the_cpu() {
         assert!(colours.len() > 50, "{kind}: image looks blank ({} colours)", colours.len());
         if kind == GridKind::Flat {
             for view in View::ALL {
-                let f = renderer.render(ctx, &scene, &gs, &bounds, &RenderOptions { view, ..opts }).unwrap();
+                let f = gpu.render(&gs, &RenderOptions { view, ..opts }).unwrap();
                 assert_eq!(f.rgba.len(), (w * h * 4) as usize);
                 write_ppm(&out.join(format!("default-{}.ppm", view.name())), w, h, &f.rgba);
             }
@@ -75,17 +71,14 @@ fn default_scene_renders_deterministically_and_matches_the_cpu() {
 #[test]
 fn frames_larger_than_a_tile_render_exactly() {
     let Some(ctx) = gpu() else { return };
-    let (mesh, _) = gridrt_scene::load_default();
-    let tris = mesh.triangles();
-    let bounds = mesh.bounds();
+    let (tris, gpu) = default_scene(ctx);
+    let bounds = gpu.bounds;
     let (w, h) = (1200, 1000);
     assert!(u64::from(tile_limit(ctx)) < u64::from(w * h), "the frame must need several tiles");
     assert!(tile_limit(ctx) <= MAX_TILE_PIXELS);
     let camera = Camera::fit(&bounds, w as f32 / h as f32);
-    let renderer = Renderer::new(ctx).unwrap();
-    let scene = GpuScene::new(ctx, &tris).unwrap();
     let (grid, _) = structure::build(&tris, &GridConfig::default()).unwrap();
-    let gs = GpuStructure::new(ctx, &grid).unwrap();
+    let gs = gpu.upload(&grid).unwrap();
     let opts = RenderOptions {
         width: w,
         height: h,
@@ -95,7 +88,7 @@ fn frames_larger_than_a_tile_render_exactly() {
         mailbox: true,
         heat_max: 64.0,
     };
-    let frame = renderer.render(ctx, &scene, &gs, &bounds, &opts).unwrap();
+    let frame = gpu.render(&gs, &opts).unwrap();
     assert_eq!((frame.hits.len(), frame.rgba.len()), ((w * h) as usize, (w * h * 4) as usize));
     let rays = camera_rays(&gpu_camera(&camera, w, h));
     let (cpu_hits, _) =
@@ -130,16 +123,14 @@ fn write_ppm(path: &std::path::Path, w: u32, h: u32, rgba: &[u8]) {
 #[test]
 fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
     let Some(ctx) = gpu() else { return };
-    let (mesh, _) = gridrt_scene::load_default();
-    let tris = mesh.triangles();
-    let bounds = mesh.bounds();
+    let (tris, gpu) = default_scene(ctx);
+    let bounds = gpu.bounds;
     // 128 × 4 bytes = 512: rows already meet the 256-byte copy alignment.
     let (w, h) = (128, 96);
     let camera = Camera::fit(&bounds, w as f32 / h as f32);
-    let renderer = Renderer::new(ctx).unwrap();
-    let scene = GpuScene::new(ctx, &tris).unwrap();
+    let renderer = gpu.renderer().unwrap();
     let (grid, _) = structure::build(&tris, &GridConfig::default()).unwrap();
-    let gs = GpuStructure::new(ctx, &grid).unwrap();
+    let gs = gpu.upload(&grid).unwrap();
     let target = FrameTarget::new(ctx, w, h, true).unwrap();
     // The sampling view the app hands to egui is valid.
     let _view = target.display_view().unwrap();
@@ -158,20 +149,22 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
             mailbox: true,
             heat_max: 32.0,
         };
-        let reference = renderer.render(ctx, &scene, &gs, &bounds, &opts).unwrap();
+        let reference = gpu.render(&gs, &opts).unwrap();
         // Twice into the same target as one tile (buffers are reused, totals are cleared per
         // frame), then in tiles of an odd size (starts off any alignment), one submission each.
         let q = tile_quantum(ctx);
         for round in 0..3 {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             if round < 2 {
-                renderer.encode(ctx, &mut enc, &scene, &gs, &bounds, &opts, &target).unwrap();
+                renderer.encode(ctx, &mut enc, &gpu.scene, &gs, &bounds, &opts, &target).unwrap();
             } else {
                 let n = w * h;
                 let mut first = 0;
                 while first < n {
                     let count = (3 * q + 5).min(n - first);
-                    renderer.encode_tile(ctx, &mut enc, &scene, &gs, &bounds, &opts, &target, first, count).unwrap();
+                    renderer
+                        .encode_tile(ctx, &mut enc, &gpu.scene, &gs, &bounds, &opts, &target, first, count)
+                        .unwrap();
                     first += count;
                     if first < n {
                         ctx.queue.submit([enc.finish()]);
@@ -180,8 +173,12 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
                 }
                 // A tile past the frame or over the target's capacity is refused, not mis-rendered.
                 let mut e2 = ctx.device.create_command_encoder(&Default::default());
-                assert!(renderer.encode_tile(ctx, &mut e2, &scene, &gs, &bounds, &opts, &target, 0, n + 1).is_err());
-                assert!(renderer.encode_tile(ctx, &mut e2, &scene, &gs, &bounds, &opts, &target, n - 1, 2).is_err());
+                assert!(
+                    renderer.encode_tile(ctx, &mut e2, &gpu.scene, &gs, &bounds, &opts, &target, 0, n + 1).is_err()
+                );
+                assert!(
+                    renderer.encode_tile(ctx, &mut e2, &gpu.scene, &gs, &bounds, &opts, &target, n - 1, 2).is_err()
+                );
             }
             let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("texture readback"),

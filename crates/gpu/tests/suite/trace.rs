@@ -73,10 +73,6 @@ impl Tally {
     }
 }
 
-fn compare(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], kinds: &[GridKind]) -> Tally {
-    compare_with(name, tris, rays, kinds, &[false, true], &GridConfig::default())
-}
-
 fn compare_with(
     name: &str,
     tris: &[[Vec3; 3]],
@@ -184,13 +180,18 @@ fn gpu_matches_cpu_on_procedural_scenes() {
         ("slivers", procedural::generate(SceneKind::Slivers, 3000, 3).mesh),
         ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh),
     ];
+    compare_scenes(scenes.into_iter().map(|(name, mesh)| (name.to_string(), mesh)), &[false, true]);
+}
+
+/// Every kind on each scene (builds: which to trace through, serial and/or parallel), then the
+/// totals: ties and ill-conditioned hits are rounding coincidences, rare, or something is wrong.
+fn compare_scenes(scenes: impl Iterator<Item = (String, Mesh)>, builds: &[bool]) {
     let mut total = Tally::default();
     for (name, mesh) in scenes {
-        let t = compare(name, &mesh.triangles(), &rays_for(&mesh, gridrt_testkit::matrix_rays(RAYS)), &GridKind::ALL);
-        total.add(&t);
+        let rays = rays_for(&mesh, gridrt_testkit::matrix_rays(RAYS));
+        total.add(&compare_with(&name, &mesh.triangles(), &rays, &GridKind::ALL, builds, &GridConfig::default()));
     }
     println!("total: {total:?}");
-    // Ties and ill-conditioned hits are rounding coincidences: rare, or something is wrong.
     check_totals(&total);
 }
 
@@ -199,22 +200,11 @@ fn gpu_matches_cpu_on_shared_scenes() {
     if gpu().is_none() {
         return;
     }
-    let mut total = Tally::default();
-    for p in gridrt_testkit::shared_scenes() {
+    let scenes = gridrt_testkit::shared_scenes().into_iter().map(|p| {
         let (mesh, _) = gridrt_scene::gltf_load::load_path(&p).unwrap();
-        let name = p.file_name().unwrap().to_string_lossy().to_string();
-        let t = compare_with(
-            &name,
-            &mesh.triangles(),
-            &rays_for(&mesh, gridrt_testkit::matrix_rays(RAYS)),
-            &GridKind::ALL,
-            &[true],
-            &GridConfig::default(),
-        );
-        total.add(&t);
-    }
-    println!("total: {total:?}");
-    check_totals(&total);
+        (p.file_name().unwrap().to_string_lossy().to_string(), mesh)
+    });
+    compare_scenes(scenes, &[true]);
 }
 
 /// The hierarchy kernel keeps its saved parent levels in named variables (one per depth, a

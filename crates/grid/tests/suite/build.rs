@@ -157,22 +157,10 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
     }
     // Different constants move the optimum: expensive steps give coarser grids.
-    let cheap = resolution::choose(
-        &tris,
-        &b,
-        Resolution::Auto,
-        &CostModel { t_step: 0.02, ..model },
-        InsertMode::BoundingBox,
-        true,
-    );
-    let dear = resolution::choose(
-        &tris,
-        &b,
-        Resolution::Auto,
-        &CostModel { t_step: 1.0, ..model },
-        InsertMode::BoundingBox,
-        true,
-    );
+    let with_step = |t_step| {
+        resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step, ..model }, InsertMode::BoundingBox, true)
+    };
+    let (cheap, dear) = (with_step(0.02), with_step(1.0));
     let m = |c: &gridrt_grid::ResolutionChoice| c.resolution.iter().map(|&x| x as f64).product::<f64>();
     assert!(m(&cheap) > m(&dear), "{:?} vs {:?}", cheap.resolution, dear.resolution);
 }
