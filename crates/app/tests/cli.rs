@@ -308,7 +308,7 @@ fn experiments_write_rows_and_charts() {
         assert!(fit["cpu"][k].as_f64().is_some_and(f64::is_finite), "cpu.{k}: {fit}");
     }
     let o = gridrt_cmd().args(["build", "@default"]).env("GRIDRT_CALIBRATION", &cal).output().unwrap();
-    assert!(o.status.success());
+    assert!(o.status.success(), "build with the calibration {fit}: {}", String::from_utf8_lossy(&o.stderr));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("calibrated constants"),
         "{}",

@@ -18,7 +18,7 @@ pub mod view;
 
 pub use context::{GpuContext, GpuError};
 pub use kernel::{GpuWalker, Kernel};
-pub use render::{Frame, FrameTarget, RenderOptions, Renderer};
+pub use render::{Frame, FrameSource, FrameTarget, RenderOptions, Renderer};
 pub use session::GpuSession;
 pub use trace::Tracer;
 pub use view::View;

@@ -21,6 +21,15 @@ use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, 
 use crate::upload::{GpuScene, GpuStructure};
 use crate::view::View;
 
+/// What a frame is drawn from: the scene on the device, a structure over it, and the scene's
+/// bounds (they place the light and the depth range).
+#[derive(Clone, Copy, Debug)]
+pub struct FrameSource<'a> {
+    pub scene: &'a GpuScene,
+    pub structure: &'a GpuStructure,
+    pub bounds: &'a Aabb,
+}
+
 /// One image request.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderOptions {
@@ -223,21 +232,18 @@ impl Renderer {
     }
 
     /// Records one whole frame into `enc` as a single tile (see [`Renderer::encode_tile`]).
-    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        s: &GpuStructure,
-        bounds: &Aabb,
+        src: &FrameSource,
         o: &RenderOptions,
         t: &FrameTarget,
     ) -> Result<(), GpuError> {
-        self.encode_tile(ctx, enc, scene, s, bounds, o, t, 0, t.pixel_count() as u32)
+        self.encode_tile(ctx, enc, src, o, t, 0..t.pixel_count() as u32)
     }
 
-    /// Records pixels `[first, first + count)` of a frame (row-major) into `enc`: camera rays,
+    /// Records the pixels `pixels` = `[first, first + count)` of a frame (row-major) into `enc`: camera rays,
     /// trace, shadow rays and trace (shaded view), shading, and for a display target the copy
     /// into the texture and the stats totals (cleared by the tile at pixel 0, copied to
     /// `totals_read` by the last tile). The tile's pixels land at the start of the target's
@@ -247,19 +253,17 @@ impl Renderer {
     /// before the next one is encoded** (the queue runs them in order). Tiles keep each
     /// submission short: the app stays responsive on a software adapter, and a browser never
     /// sees a dispatch long enough to lose the device.
-    #[allow(clippy::too_many_arguments)]
     pub fn encode_tile(
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        s: &GpuStructure,
-        bounds: &Aabb,
+        src: &FrameSource,
         o: &RenderOptions,
         t: &FrameTarget,
-        first: u32,
-        count: u32,
+        pixels: std::ops::Range<u32>,
     ) -> Result<(), GpuError> {
+        let FrameSource { scene, structure: s, bounds } = *src;
+        let (first, count) = (pixels.start, pixels.end.saturating_sub(pixels.start));
         if (o.width, o.height) != (t.width, t.height) {
             return Err(GpuError::Unsupported(format!(
                 "render of {}x{} into a {}x{} target",
@@ -378,14 +382,7 @@ impl Renderer {
     }
 
     /// Renders one frame tile by tile, reading each tile back as it finishes.
-    pub fn render(
-        &self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        s: &GpuStructure,
-        bounds: &Aabb,
-        o: &RenderOptions,
-    ) -> Result<Frame, GpuError> {
+    pub fn render(&self, ctx: &GpuContext, src: &FrameSource, o: &RenderOptions) -> Result<Frame, GpuError> {
         let t = FrameTarget::new(ctx, o.width, o.height, false)?;
         let n = t.pixel_count();
         let cap = t.tile_capacity() as u64;
@@ -412,7 +409,7 @@ impl Renderer {
         while first < n {
             let count = cap.min(n - first);
             let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render tile") });
-            self.encode_tile(ctx, &mut enc, scene, s, bounds, o, &t, first as u32, count as u32)?;
+            self.encode_tile(ctx, &mut enc, src, o, &t, first as u32..(first + count) as u32)?;
             enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, count * PIXEL_BYTES);
             enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, count * HIT_BYTES);
             enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, count * STATS_BYTES);

@@ -10,7 +10,7 @@ use gridrt_grid::{AnyGrid, RayStats, Traversal};
 use gridrt_scene::{Aabb, Hit, Ray};
 
 use crate::context::{GpuContext, GpuError};
-use crate::render::{Frame, RenderOptions, Renderer};
+use crate::render::{Frame, FrameSource, RenderOptions, Renderer};
 use crate::trace::Tracer;
 use crate::upload::{GpuScene, GpuStructure};
 
@@ -55,7 +55,12 @@ impl<'a> GpuSession<'a> {
 
     /// Renders one image through `s` and reads it back (see [`Renderer::render`]).
     pub fn render(&self, s: &GpuStructure, opts: &RenderOptions) -> Result<Frame, GpuError> {
-        self.renderer()?.render(self.ctx, &self.scene, s, &self.bounds, opts)
+        self.renderer()?.render(self.ctx, &self.source(s), opts)
+    }
+
+    /// What a frame through `s` is drawn from.
+    pub fn source<'s>(&'s self, s: &'s GpuStructure) -> FrameSource<'s> {
+        FrameSource { scene: &self.scene, structure: s, bounds: &self.bounds }
     }
 
     /// The render pass, its pipelines created by the first call.

@@ -16,7 +16,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
     let tris = mesh.triangles();
     let b = mesh.bounds();
-    let (grid, build) = build_grid(&tris, &args.grid)?;
+    let (grid, build) = build_grid(&tris, &args.grid.config()?)?;
     let ctx = super::gpu_context()?;
     let gpu = GpuSession::new(&ctx, &tris, b)?;
     let gs = gpu.upload(&grid)?;

@@ -10,7 +10,7 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
     let tris = mesh.triangles();
     let cfg = args.grid.config()?;
-    let (_, b) = build_grid(&tris, &args.grid)?;
+    let (_, b) = build_grid(&tris, &cfg)?;
     let s = &b.stats;
     if args.json {
         let phases: serde_json::Map<String, serde_json::Value> =

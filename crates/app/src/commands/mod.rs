@@ -15,10 +15,10 @@ use std::path::Path;
 
 use anyhow::Context;
 use glam::Vec3;
-use gridrt_grid::{AnyGrid, BuildReport, structure};
+use gridrt_grid::{AnyGrid, BuildReport, GridConfig, structure};
 use gridrt_scene::{LoadReport, Mesh};
 
-use crate::cli::{GridArgs, SceneArg};
+use crate::cli::SceneArg;
 
 /// Loads the scene named on the command line (`@default`: the embedded one).
 pub fn load_scene(arg: &SceneArg) -> anyhow::Result<(Mesh, LoadReport)> {
@@ -28,10 +28,9 @@ pub fn load_scene(arg: &SceneArg) -> anyhow::Result<(Mesh, LoadReport)> {
     Ok(gridrt_scene::gltf_load::load_path_with(Path::new(&arg.scene), &crate::limits::get())?)
 }
 
-/// Builds the structure the grid flags describe.
-pub fn build_grid(tris: &[[Vec3; 3]], args: &GridArgs) -> anyhow::Result<(AnyGrid, BuildReport)> {
-    let cfg = args.config()?;
-    structure::build(tris, &cfg).with_context(|| format!("building the {} grid", cfg.kind))
+/// Builds the structure `cfg` (from the grid flags).
+pub fn build_grid(tris: &[[Vec3; 3]], cfg: &GridConfig) -> anyhow::Result<(AnyGrid, BuildReport)> {
+    structure::build(tris, cfg).with_context(|| format!("building the {} grid", cfg.kind))
 }
 
 pub use crate::format::human_bytes;

@@ -25,7 +25,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     } else {
         Camera::parse(&args.camera).map_err(|e| anyhow::anyhow!("--camera: {e}"))?
     };
-    let (grid, b) = build_grid(&tris, &args.grid)?;
+    let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
     let ctx = super::gpu_context()?;
     let gpu = GpuSession::new(&ctx, &tris, bounds)?;
     let gs = gpu.upload(&grid)?;

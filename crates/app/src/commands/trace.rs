@@ -25,7 +25,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             ("brute force".to_string(), 0.0, 0, hits, stats, start.elapsed().as_secs_f64())
         }
         Backend::Gpu => {
-            let (grid, b) = build_grid(&tris, &args.grid)?;
+            let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
             let ctx = super::gpu_context()?;
             let gpu = gridrt_gpu::GpuSession::new(&ctx, &tris, mesh.bounds())?;
             let gs = gpu.upload(&grid)?;
@@ -48,7 +48,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             (label, b.times.total(), b.stats.memory_bytes, hits, stats, secs)
         }
         Backend::Cpu => {
-            let (grid, b) = build_grid(&tris, &args.grid)?;
+            let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
             let opts = TraceOptions { traversal: args.traversal, mailbox: args.mailbox };
             let start = Instant::now();
             let (hits, stats) = grid.trace_batch(&tris, &rays, opts, true);

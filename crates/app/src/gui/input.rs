@@ -3,6 +3,9 @@
 
 use eframe::egui::{self, Key, PointerButton};
 
+#[cfg(not(target_arch = "wasm32"))]
+use gridrt_gpu::FrameSource;
+
 use super::GridrtApp;
 use super::errors::ErrorKind;
 use super::jobs::SceneSource;
@@ -77,13 +80,14 @@ impl GridrtApp {
         };
         let (Some(gs), Some(s)) = (&scene.gpu, &b.gpu) else { return };
         let opts = self.render_options(key.camera, key.size);
-        let result =
-            gpu.renderer.render(&gpu.ctx, gs, s, &scene.loaded.bounds, &opts).map_err(|e| e.to_string()).and_then(
-                |f| {
-                    image::save_buffer(&path, &f.rgba, f.width, f.height, image::ExtendedColorType::Rgba8)
-                        .map_err(|e| e.to_string())
-                },
-            );
+        let result = gpu
+            .renderer
+            .render(&gpu.ctx, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds }, &opts)
+            .map_err(|e| e.to_string())
+            .and_then(|f| {
+                image::save_buffer(&path, &f.rgba, f.width, f.height, image::ExtendedColorType::Rgba8)
+                    .map_err(|e| e.to_string())
+            });
         if let Err(e) = result {
             self.errors.report(ErrorKind::Other, format!("saving {}: {e}", path.display()));
         }

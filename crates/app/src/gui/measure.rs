@@ -7,6 +7,9 @@ use eframe::egui;
 use gridrt_gpu::upload::GpuStructure;
 use gridrt_grid::{GridConfig, GridKind, Resolution};
 
+#[cfg(not(target_arch = "wasm32"))]
+use gridrt_gpu::FrameSource;
+
 use super::GridrtApp;
 use super::built::{Built, build_structure};
 use super::cost_plot;
@@ -70,7 +73,11 @@ impl GridrtApp {
             }
         };
         let opts = self.render_options(key.camera, key.size);
-        match self.viewport.render_blocking(gpu, gs, &s, &scene.loaded.bounds, &opts) {
+        match self.viewport.render_blocking(
+            gpu,
+            &FrameSource { scene: gs, structure: &s, bounds: &scene.loaded.bounds },
+            &opts,
+        ) {
             Ok(ms) => {
                 let m = (res[0] as f64 * res[1] as f64 * res[2] as f64).cbrt();
                 self.measurement.results.push((m, ms));

@@ -26,7 +26,7 @@ pub mod web;
 use std::sync::{Arc, Mutex};
 
 use eframe::egui::{self, Sense, Vec2};
-use gridrt_gpu::{RenderOptions, View};
+use gridrt_gpu::{FrameSource, RenderOptions, View};
 use gridrt_scene::Camera;
 use web_time::Instant;
 
@@ -287,7 +287,7 @@ impl GridrtApp {
         }
         match self
             .viewport
-            .step(gpu, gs, s, &scene.loaded.bounds)
+            .step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds })
             .and_then(|done| gpu.ctx.check_device().map(|()| done))
         {
             // A finished frame ends an earlier render error.

@@ -9,9 +9,7 @@ use std::sync::{Arc, Mutex};
 use eframe::egui;
 use gridrt_gpu::layout::FrameTotals;
 use gridrt_gpu::trace::tile_quantum;
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
-use gridrt_gpu::{FrameTarget, GpuContext, GpuError, RenderOptions, Renderer, View};
-use gridrt_scene::Aabb;
+use gridrt_gpu::{FrameSource, FrameTarget, GpuContext, GpuError, RenderOptions, Renderer, View};
 use web_time::Instant;
 
 /// The GPU side of the app.
@@ -209,7 +207,7 @@ impl Viewport {
 
     /// Advances rendering: collects a finished tile, finishes the frame, starts a requested
     /// one, submits the next tile. Returns true when a frame completed.
-    pub fn step(&mut self, gpu: &Gpu, scene: &GpuScene, s: &GpuStructure, bounds: &Aabb) -> Result<bool, GpuError> {
+    pub fn step(&mut self, gpu: &Gpu, src: &FrameSource) -> Result<bool, GpuError> {
         #[cfg(not(target_arch = "wasm32"))]
         let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
         let mut completed = false;
@@ -267,7 +265,7 @@ impl Viewport {
             let c = tile.min(f.n - f.next);
             let mut enc =
                 gpu.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("app tile") });
-            gpu.renderer.encode_tile(&gpu.ctx, &mut enc, scene, s, bounds, &f.opts, target, f.next, c)?;
+            gpu.renderer.encode_tile(&gpu.ctx, &mut enc, src, &f.opts, target, f.next..f.next + c)?;
             // Each tile's uniforms are written before its own submission, so back-to-back
             // submissions see their own values (queue writes are ordered with submissions).
             index = Some(gpu.ctx.queue.submit([enc.finish()]));
@@ -350,14 +348,7 @@ impl Viewport {
     /// Renders a whole frame, blocking until it is done (the cost-model measurement times
     /// frames). Returns its milliseconds, wall clock.
     #[cfg(not(target_arch = "wasm32"))]
-    pub fn render_blocking(
-        &mut self,
-        gpu: &Gpu,
-        scene: &GpuScene,
-        s: &GpuStructure,
-        bounds: &Aabb,
-        opts: &RenderOptions,
-    ) -> Result<f64, GpuError> {
+    pub fn render_blocking(&mut self, gpu: &Gpu, src: &FrameSource, opts: &RenderOptions) -> Result<f64, GpuError> {
         // Finish (or abandon) what is in flight first.
         self.restart = None;
         while self.in_flight.is_some() {
@@ -373,12 +364,12 @@ impl Viewport {
                 // Stop after the tile on the GPU: do not submit the rest.
                 f.n = f.next;
             }
-            self.step(gpu, scene, s, bounds)?;
+            self.step(gpu, src)?;
         }
         self.start(opts);
         let started = Instant::now();
         loop {
-            if self.step(gpu, scene, s, bounds)? {
+            if self.step(gpu, src)? {
                 return Ok(started.elapsed().as_secs_f64() * 1e3);
             }
             let _ = gpu.ctx.device.poll(wgpu::PollType::wait_indefinitely());

@@ -156,14 +156,14 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
         for round in 0..3 {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             if round < 2 {
-                renderer.encode(ctx, &mut enc, &gpu.scene, &gs, &bounds, &opts, &target).unwrap();
+                renderer.encode(ctx, &mut enc, &gpu.source(&gs), &opts, &target).unwrap();
             } else {
                 let n = w * h;
                 let mut first = 0;
                 while first < n {
                     let count = (3 * q + 5).min(n - first);
                     renderer
-                        .encode_tile(ctx, &mut enc, &gpu.scene, &gs, &bounds, &opts, &target, first, count)
+                        .encode_tile(ctx, &mut enc, &gpu.source(&gs), &opts, &target, first..first + count)
                         .unwrap();
                     first += count;
                     if first < n {
@@ -173,12 +173,8 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
                 }
                 // A tile past the frame or over the target's capacity is refused, not mis-rendered.
                 let mut e2 = ctx.device.create_command_encoder(&Default::default());
-                assert!(
-                    renderer.encode_tile(ctx, &mut e2, &gpu.scene, &gs, &bounds, &opts, &target, 0, n + 1).is_err()
-                );
-                assert!(
-                    renderer.encode_tile(ctx, &mut e2, &gpu.scene, &gs, &bounds, &opts, &target, n - 1, 2).is_err()
-                );
+                assert!(renderer.encode_tile(ctx, &mut e2, &gpu.source(&gs), &opts, &target, 0..n + 1).is_err());
+                assert!(renderer.encode_tile(ctx, &mut e2, &gpu.source(&gs), &opts, &target, n - 1..n + 1).is_err());
             }
             let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("texture readback"),
