@@ -8,10 +8,10 @@
 
 @compute @workgroup_size(64)
 fn camera_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let w = u32(camera.right.w);
-    if gid.x >= shade.tile.y {
+    let w = u32(camera.width);
+    if gid.x >= shade.pixel_count {
         return;
     }
-    let p = shade.tile.x + gid.x;
+    let p = shade.first_pixel + gid.x;
     out_rays[gid.x] = camera_ray(camera, p % w, p / w);
 }

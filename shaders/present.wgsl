@@ -25,13 +25,13 @@ fn add64(lo: u32, v: u32) {
 @compute @workgroup_size(64)
 fn present(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let i = gid.x;
-    let w = shade.view.z;
-    let n = shade.tile.y;
+    let w = shade.width;
+    let n = shade.pixel_count;
     // No early return: every invocation must reach the barrier.
     if i < n {
         let px = pixels[i];
         let c = vec4<f32>(f32(px & 0xffu), f32((px >> 8u) & 0xffu), f32((px >> 16u) & 0xffu), f32(px >> 24u)) / 255.0;
-        let p = shade.tile.x + i;
+        let p = shade.first_pixel + i;
         textureStore(image, vec2<u32>(p % w, p / w), c);
         let st = primary_stats[i];
         atomicAdd(&partial[0], st.cells);

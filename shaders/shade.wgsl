@@ -30,13 +30,13 @@ fn heat(x: f32) -> vec3<f32> {
 @compute @workgroup_size(64)
 fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if i >= shade.tile.y {
+    if i >= shade.pixel_count {
         return;
     }
-    let view = shade.view.x;
+    let view = shade.view;
     let h = primary_hits[i];
     let st = primary_stats[i];
-    let hmax = bitcast<f32>(shade.view.y);
+    let hmax = shade.heat_max;
     if view == 3u {
         pixels[i] = pack_rgba(heat(f32(st.cells) / hmax));
         return;
@@ -65,12 +65,12 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if view == 2u {
         let dist = h.t * length(r.dir_tmax.xyz);
-        let x = (dist - shade.depth.x) / max(shade.depth.y - shade.depth.x, 1e-20);
+        let x = (dist - shade.depth_near) / max(shade.depth_far - shade.depth_near, 1e-20);
         pixels[i] = pack_rgba(vec3<f32>(1.0 - clamp(x, 0.0, 1.0)));
         return;
     }
     let p = hit_point(r, h.t);
-    let l = normalize(shade.light.xyz - p);
+    let l = normalize(shade.light - p);
     let lit = select(0.0, 1.0, shadow_hits[i].triangle == NO_HIT);
     let head = abs(dot(n, -dir));
     let diffuse = max(dot(n, l), 0.0) * lit;

@@ -11,7 +11,7 @@
 @compute @workgroup_size(64)
 fn shadow_rays_from_hits(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if i >= shade.tile.y {
+    if i >= shade.pixel_count {
         return;
     }
     let h = primary_hits[i];
@@ -21,7 +21,7 @@ fn shadow_rays_from_hits(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let p = hit_point(primary[i], h.t);
     // Offset along the ray to the light, relative to the scene size, to leave the surface.
-    let to_light = shade.light.xyz - p;
-    let eps = 1e-4 * shade.light.w / max(length(to_light), 1e-20);
+    let to_light = shade.light - p;
+    let eps = 1e-4 * shade.diagonal / max(length(to_light), 1e-20);
     shadow_rays[i] = Ray(vec4<f32>(p, eps), vec4<f32>(to_light, 1.0));
 }

@@ -1,40 +1,45 @@
 //!include shared/ray.wgsl
 // Render-pass data. Keep in sync with crates/gpu/src/layout.rs (GpuCamera, ShadeParams).
 
+// Rust: crates/gpu/src/layout.rs `GpuCamera` (field by field).
 struct Camera {
-    // xyz: eye; w: tan(vfov / 2).
-    eye: vec4<f32>,
-    // xyz: right (unit); w: width.
-    right: vec4<f32>,
-    // xyz: up (unit); w: height.
-    up: vec4<f32>,
-    // xyz: forward (unit); w: aspect (width / height).
-    forward: vec4<f32>,
+    eye: vec3<f32>,
+    tan_half_vfov: f32,
+    right: vec3<f32>,
+    width: f32,
+    up: vec3<f32>,
+    height: f32,
+    forward: vec3<f32>,
+    aspect: f32,
 }
 
+// Rust: crates/gpu/src/layout.rs `ShadeParams` (field by field).
 struct ShadeParams {
-    // xyz: point light; w: scene diagonal.
-    light: vec4<f32>,
-    // x: view (0 shaded, 1 normals, 2 depth, 3 heatmap-cells, 4 heatmap-tests);
-    // y: heatmap maximum (f32 bits); z: width; w: height.
-    view: vec4<u32>,
-    // x, y: depth near / far.
-    depth: vec4<f32>,
-    // x: first pixel of this dispatch (a tile of the frame); y: pixels in it. The per-pixel
-    // buffers are bound from the tile's first pixel, so kernels index them from 0.
-    tile: vec4<u32>,
+    light: vec3<f32>,
+    diagonal: f32,
+    // View code (crates/gpu/src/view.rs): 0 shaded, 1 normals, 2 depth, 3 heatmap-cells,
+    // 4 heatmap-tests.
+    view: u32,
+    heat_max: f32,
+    width: u32,
+    height: u32,
+    depth_near: f32,
+    depth_far: f32,
+    // The tile: the per-pixel buffers are bound from its first pixel (kernels index from 0).
+    first_pixel: u32,
+    pixel_count: u32,
 }
 
 // The primary ray of pixel (x, y), row 0 at the top. CPU port: crates/gpu/src/cpu.rs.
 fn camera_ray(cam: Camera, x: u32, y: u32) -> Ray {
-    let w = cam.right.w;
-    let h = cam.up.w;
-    let half_v = cam.eye.w;
-    let half_h = half_v * cam.forward.w;
+    let w = cam.width;
+    let h = cam.height;
+    let half_v = cam.tan_half_vfov;
+    let half_h = half_v * cam.aspect;
     let sx = ((f32(x) + 0.5) / w * 2.0 - 1.0) * half_h;
     let sy = (1.0 - (f32(y) + 0.5) / h * 2.0) * half_v;
-    let d = cam.forward.xyz + cam.right.xyz * sx + cam.up.xyz * sy;
-    return Ray(vec4<f32>(cam.eye.xyz, 0.0), vec4<f32>(d, inf()));
+    let d = cam.forward + cam.right * sx + cam.up * sy;
+    return Ray(vec4<f32>(cam.eye, 0.0), vec4<f32>(d, inf()));
 }
 
 // The point at parameter t along r.

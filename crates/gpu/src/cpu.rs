@@ -17,29 +17,30 @@ pub fn gpu_camera(cam: &Camera, width: u32, height: u32) -> GpuCamera {
     let up = right.cross(fwd);
     let half_v = (cam.vfov_deg.to_radians() * 0.5).tan();
     GpuCamera {
-        eye: cam.eye.extend(half_v).to_array(),
-        right: right.extend(width as f32).to_array(),
-        up: up.extend(height as f32).to_array(),
-        forward: fwd.extend(width as f32 / height as f32).to_array(),
+        eye: cam.eye.to_array(),
+        tan_half_vfov: half_v,
+        right: right.to_array(),
+        width: width as f32,
+        up: up.to_array(),
+        height: height as f32,
+        forward: fwd.to_array(),
+        aspect: width as f32 / height as f32,
     }
 }
 
 /// shaders/shared/render_bindings.wgsl `camera_ray`.
 pub fn camera_ray(cam: &GpuCamera, x: u32, y: u32) -> Ray {
-    let w = cam.right[3];
-    let h = cam.up[3];
-    let half_v = cam.eye[3];
-    let half_h = half_v * cam.forward[3];
-    let sx = ((x as f32 + 0.5) / w * 2.0 - 1.0) * half_h;
-    let sy = (1.0 - (y as f32 + 0.5) / h * 2.0) * half_v;
-    let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
-    let d = v3(cam.forward) + v3(cam.right) * sx + v3(cam.up) * sy;
-    Ray::new(v3(cam.eye), d, 0.0, f32::INFINITY)
+    let half_v = cam.tan_half_vfov;
+    let half_h = half_v * cam.aspect;
+    let sx = ((x as f32 + 0.5) / cam.width * 2.0 - 1.0) * half_h;
+    let sy = (1.0 - (y as f32 + 0.5) / cam.height * 2.0) * half_v;
+    let d = Vec3::from(cam.forward) + Vec3::from(cam.right) * sx + Vec3::from(cam.up) * sy;
+    Ray::new(Vec3::from(cam.eye), d, 0.0, f32::INFINITY)
 }
 
 /// All primary rays of the image, row-major.
 pub fn camera_rays(cam: &GpuCamera) -> Vec<Ray> {
-    let (w, h) = (cam.right[3] as u32, cam.up[3] as u32);
+    let (w, h) = (cam.width as u32, cam.height as u32);
     (0..h).flat_map(|y| (0..w).map(move |x| camera_ray(cam, x, y))).collect()
 }
 
@@ -64,9 +65,9 @@ pub fn shadow_ray(shade: &crate::layout::ShadeParams, primary: &Ray, hit: &gridr
         return Ray::new(Vec3::ZERO, Vec3::X, 1.0, 0.0);
     }
     let p = primary.at(hit.t);
-    let light = Vec3::new(shade.light[0], shade.light[1], shade.light[2]);
+    let light = Vec3::from(shade.light);
     let to_light = light - p;
-    let eps = 1e-4 * shade.light[3] / to_light.length().max(1e-20);
+    let eps = 1e-4 * shade.diagonal / to_light.length().max(1e-20);
     Ray::new(p, to_light, eps, 1.0)
 }
 
@@ -100,8 +101,8 @@ pub fn shade_pixel(
     shadow_hit: &gridrt_scene::Hit,
     tri: [Vec3; 3],
 ) -> u32 {
-    let view = View::from_code(shade.view[0]).unwrap_or_default();
-    let hmax = f32::from_bits(shade.view[1]);
+    let view = View::from_code(shade.view).unwrap_or_default();
+    let hmax = shade.heat_max;
     match view {
         View::HeatmapCells => return pack_rgba(heat(stats.cells as f32 / hmax)),
         View::HeatmapTests => return pack_rgba(heat(stats.tests as f32 / hmax)),
@@ -121,11 +122,11 @@ pub fn shade_pixel(
     }
     if view == View::Depth {
         let dist = hit.t * primary.d().length();
-        let x = (dist - shade.depth[0]) / (shade.depth[1] - shade.depth[0]).max(1e-20);
+        let x = (dist - shade.depth_near) / (shade.depth_far - shade.depth_near).max(1e-20);
         return pack_rgba(Vec3::splat(1.0 - x.clamp(0.0, 1.0)));
     }
     let p = primary.at(hit.t);
-    let light = Vec3::new(shade.light[0], shade.light[1], shade.light[2]);
+    let light = Vec3::from(shade.light);
     let l = (light - p).normalize();
     let lit = if shadow_hit.is_hit() { 0.0 } else { 1.0 };
     let head = n.dot(-dir).abs();

@@ -57,30 +57,43 @@ pub struct GpuNode {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuCamera {
-    /// xyz: eye; w: tan(vfov / 2).
-    pub eye: [f32; 4],
-    /// xyz: right (unit); w: image width.
-    pub right: [f32; 4],
-    /// xyz: up (unit); w: image height.
-    pub up: [f32; 4],
-    /// xyz: forward (unit); w: aspect (width / height).
-    pub forward: [f32; 4],
+    pub eye: [f32; 3],
+    /// tan(vfov / 2).
+    pub tan_half_vfov: f32,
+    /// Unit vector to the image's right.
+    pub right: [f32; 3],
+    /// Image size in pixels.
+    pub width: f32,
+    /// Unit vector to the image's top.
+    pub up: [f32; 3],
+    pub height: f32,
+    /// Unit view direction.
+    pub forward: [f32; 3],
+    /// width / height.
+    pub aspect: f32,
 }
 
 /// Shading parameters (uniform). WGSL `ShadeParams`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ShadeParams {
-    /// xyz: point light position; w: scene diagonal (shadow-ray offset scale).
-    pub light: [f32; 4],
-    /// x: view (0 shaded, 1 normals, 2 depth, 3 heatmap-cells, 4 heatmap-tests);
-    /// y: heatmap maximum (count mapped to the top colour, as bits of f32);
-    /// z: width; w: height.
-    pub view: [u32; 4],
-    /// x, y: depth range near / far.
-    pub depth: [f32; 4],
-    /// x: first pixel of this dispatch (a tile of the frame); y: pixels in it.
-    pub tile: [u32; 4],
+    /// Point light position.
+    pub light: [f32; 3],
+    /// Scene diagonal (the shadow-ray offset scale).
+    pub diagonal: f32,
+    /// [`crate::View::code`].
+    pub view: u32,
+    /// Heatmap count mapped to the top colour.
+    pub heat_max: f32,
+    pub width: u32,
+    pub height: u32,
+    /// The depth view's range.
+    pub depth_near: f32,
+    pub depth_far: f32,
+    /// First pixel of this dispatch (a tile of the frame) and pixels in it. The per-pixel
+    /// buffers are bound from the tile's first pixel, so kernels index them from 0.
+    pub first_pixel: u32,
+    pub pixel_count: u32,
 }
 
 /// Sums over a frame's primary rays, written by shaders/present.wgsl into an

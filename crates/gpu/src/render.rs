@@ -17,7 +17,7 @@ use gridrt_scene::{Aabb, Camera, Hit};
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
 use crate::layout::{FrameTotals, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams};
-use crate::trace::{TraceBuffers, Tracer, WORKGROUP, pipeline, range, read_back, walker_for};
+use crate::trace::{TraceJob, Tracer, WORKGROUP, pipeline, range, read_back, walker_for};
 use crate::upload::{GpuScene, GpuStructure};
 use crate::view::View;
 
@@ -41,6 +41,27 @@ pub struct RenderOptions {
     pub mailbox: bool,
     /// Count shown as the top of the heatmap scale.
     pub heat_max: f32,
+}
+
+impl RenderOptions {
+    /// A `width` × `height` shaded image from `camera`: Amanatides–Woo with the mailbox, the
+    /// heatmap scale topping out at 64.
+    pub fn new(camera: Camera, width: u32, height: u32) -> RenderOptions {
+        RenderOptions {
+            width,
+            height,
+            camera,
+            view: View::Shaded,
+            traversal: Traversal::AmanatidesWoo,
+            mailbox: true,
+            heat_max: 64.0,
+        }
+    }
+
+    /// [`RenderOptions::new`] with the camera framing `bounds` ([`Camera::fit`]).
+    pub fn fit(bounds: &Aabb, width: u32, height: u32) -> RenderOptions {
+        RenderOptions::new(Camera::fit(bounds, width as f32 / height as f32), width, height)
+    }
 }
 
 /// A rendered image with the primary rays' hits and stats.
@@ -203,10 +224,16 @@ pub fn shade_params(bounds: &Aabb, o: &RenderOptions) -> ShadeParams {
     let radius = bounds.diagonal() * 0.5;
     let eye_dist = (o.camera.eye - bounds.center()).length();
     ShadeParams {
-        light: light_position(bounds).extend(bounds.diagonal()).to_array(),
-        view: [o.view.code(), o.heat_max.max(1.0).to_bits(), o.width, o.height],
-        depth: [(eye_dist - radius).max(0.0), eye_dist + radius, 0.0, 0.0],
-        tile: [0, o.width * o.height, 0, 0],
+        light: light_position(bounds).to_array(),
+        diagonal: bounds.diagonal(),
+        view: o.view.code(),
+        heat_max: o.heat_max.max(1.0),
+        width: o.width,
+        height: o.height,
+        depth_near: (eye_dist - radius).max(0.0),
+        depth_far: eye_dist + radius,
+        first_pixel: 0,
+        pixel_count: o.width * o.height,
     }
 }
 
@@ -282,8 +309,7 @@ impl Renderer {
         let q = &ctx.queue;
         let cam = gpu_camera(&o.camera, o.width, o.height);
         q.write_buffer(&t.camera, 0, bytemuck::bytes_of(&cam));
-        let mut sp = shade_params(bounds, o);
-        sp.tile = [first, count, 0, 0];
+        let sp = ShadeParams { first_pixel: first, pixel_count: count, ..shade_params(bounds, o) };
         q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&sp));
         let tp = GridParams { ray_count: count, mailbox: o.mailbox as u32, first_ray: first, ..s.params };
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
@@ -308,48 +334,37 @@ impl Renderer {
             pass.set_bind_group(0, bg, &[]);
             pass.dispatch_workgroups(groups, 1, 1);
         };
+        // The tile's records of each per-pixel buffer.
         let r = |buf, stride| range(buf, 0, count, stride);
-        let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), r(&t.rays, RAY_BYTES), b(&t.shade)]);
+        let (rays, hits, stats) = (r(&t.rays, RAY_BYTES), r(&t.hits, HIT_BYTES), r(&t.stats, STATS_BYTES));
+        let (pixels, shade) = (r(&t.pixels, PIXEL_BYTES), b(&t.shade));
+        let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), rays.clone(), shade.clone()]);
         run(enc, &self.camera, &camera_bg, "camera rays");
-        let primary = TraceBuffers {
-            params: &t.trace_params,
-            rays: &t.rays,
-            hits: &t.hits,
-            stats: &t.stats,
-            first: 0,
-            count,
-            walker,
+        let trace = |enc: &mut wgpu::CommandEncoder, rays, hits, stats| {
+            let params = &t.trace_params;
+            self.tracer.encode(ctx, enc, &TraceJob { scene, structure: s, params, rays, hits, stats, count, walker })
         };
-        self.tracer.encode(ctx, enc, scene, s, &primary)?;
+        trace(enc, &t.rays, &t.hits, &t.stats)?;
         if o.view == View::Shaded {
             let shadow_bg = bind(
                 &self.shadow,
                 "shadow bind group",
-                &[b(&t.shade), r(&t.rays, RAY_BYTES), r(&t.hits, HIT_BYTES), r(&t.shadow_rays, RAY_BYTES)],
+                &[shade.clone(), rays.clone(), hits.clone(), r(&t.shadow_rays, RAY_BYTES)],
             );
             run(enc, &self.shadow, &shadow_bg, "shadow rays");
-            let shadow = TraceBuffers {
-                params: &t.trace_params,
-                rays: &t.shadow_rays,
-                hits: &t.shadow_hits,
-                stats: &t.shadow_stats,
-                first: 0,
-                count,
-                walker,
-            };
-            self.tracer.encode(ctx, enc, scene, s, &shadow)?;
+            trace(enc, &t.shadow_rays, &t.shadow_hits, &t.shadow_stats)?;
         }
         let shade_bg = bind(
             &self.shade,
             "shade bind group",
             &[
-                b(&t.shade),
-                r(&t.rays, RAY_BYTES),
-                r(&t.hits, HIT_BYTES),
-                r(&t.stats, STATS_BYTES),
+                shade.clone(),
+                rays,
+                hits.clone(),
+                stats.clone(),
                 r(&t.shadow_hits, HIT_BYTES),
                 b(&scene.triangles),
-                r(&t.pixels, PIXEL_BYTES),
+                pixels.clone(),
             ],
         );
         run(enc, &self.shade, &shade_bg, "shade");
@@ -364,14 +379,7 @@ impl Renderer {
             let present_bg = bind(
                 &self.present,
                 "present bind group",
-                &[
-                    b(&t.shade),
-                    r(&t.pixels, PIXEL_BYTES),
-                    r(&t.hits, HIT_BYTES),
-                    r(&t.stats, STATS_BYTES),
-                    b(&t.totals),
-                    wgpu::BindingResource::TextureView(&view),
-                ],
+                &[shade, pixels, hits, stats, b(&t.totals), wgpu::BindingResource::TextureView(&view)],
             );
             run(enc, &self.present, &present_bg, "present");
             if first as u64 + count as u64 == n {

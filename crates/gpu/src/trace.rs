@@ -106,19 +106,17 @@ impl Scratch {
     }
 }
 
-/// Buffers one trace dispatch reads and writes.
+/// One trace dispatch: the scene and structure it walks, the buffers it reads and writes (the
+/// first `count` records of each), and the walker the kernel is composed with.
 #[derive(Debug)]
-pub struct TraceBuffers<'a> {
+pub struct TraceJob<'a> {
+    pub scene: &'a GpuScene,
+    pub structure: &'a GpuStructure,
     pub params: &'a wgpu::Buffer,
     pub rays: &'a wgpu::Buffer,
     pub hits: &'a wgpu::Buffer,
     pub stats: &'a wgpu::Buffer,
-    /// First ray of the dispatch in `rays` (and its hit and stats slots): the buffers are
-    /// bound from there, so the kernels index from 0. A multiple of [`tile_quantum`].
-    pub first: u32,
-    /// Rays in the dispatch.
     pub count: u32,
-    /// The walker the kernel is composed with.
     pub walker: GpuWalker,
 }
 
@@ -138,21 +136,15 @@ impl Tracer {
         Ok(p)
     }
 
-    /// Records one trace dispatch into `encoder`.
-    pub fn encode(
-        &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        s: &GpuStructure,
-        b: &TraceBuffers,
-    ) -> Result<(), GpuError> {
+    /// Records one trace dispatch into `enc`.
+    pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, b: &TraceJob) -> Result<(), GpuError> {
+        let (scene, s) = (b.scene, b.structure);
         let pipe = self.pipeline(ctx, Kernel::for_kind(s.kind), b.walker)?;
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: range(b.rays, b.first, b.count, RAY_BYTES) },
-            wgpu::BindGroupEntry { binding: 2, resource: range(b.hits, b.first, b.count, HIT_BYTES) },
-            wgpu::BindGroupEntry { binding: 3, resource: range(b.stats, b.first, b.count, STATS_BYTES) },
+            wgpu::BindGroupEntry { binding: 1, resource: range(b.rays, 0, b.count, RAY_BYTES) },
+            wgpu::BindGroupEntry { binding: 2, resource: range(b.hits, 0, b.count, HIT_BYTES) },
+            wgpu::BindGroupEntry { binding: 3, resource: range(b.stats, 0, b.count, STATS_BYTES) },
             wgpu::BindGroupEntry { binding: 4, resource: scene.triangles.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 5, resource: s.refs.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 6, resource: s.cells.as_entire_binding() },
@@ -165,8 +157,8 @@ impl Tracer {
             layout: &pipe.get_bind_group_layout(0),
             entries: &entries,
         });
-        let mut pass = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("trace pass"), timestamp_writes: None });
+        let mut pass =
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("trace pass"), timestamp_writes: None });
         pass.set_pipeline(&pipe);
         pass.set_bind_group(0, &bind, &[]);
         pass.dispatch_workgroups(b.count.div_ceil(WORKGROUP), 1, 1);
@@ -214,8 +206,8 @@ impl Tracer {
         (walker, mailbox): (GpuWalker, bool),
         b: &Scratch,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
-        let mut hits = Vec::with_capacity(rays.len());
-        let mut stats = Vec::with_capacity(rays.len());
+        let mut all_hits = Vec::with_capacity(rays.len());
+        let mut all_stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
             let count = part.len() as u32;
             let p =
@@ -223,16 +215,8 @@ impl Tracer {
             ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
             ctx.queue.write_buffer(&b.rays, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
-            let tb = TraceBuffers {
-                params: &b.params,
-                rays: &b.rays,
-                hits: &b.hits,
-                stats: &b.stats,
-                first: 0,
-                count,
-                walker,
-            };
-            self.encode(ctx, &mut enc, scene, s, &tb)?;
+            let (params, rays, hits, stats) = (&b.params, &b.rays, &b.hits, &b.stats);
+            self.encode(ctx, &mut enc, &TraceJob { scene, structure: s, params, rays, hits, stats, count, walker })?;
             let (hit_bytes, stat_bytes) = (count as u64 * HIT_BYTES, count as u64 * STATS_BYTES);
             enc.copy_buffer_to_buffer(&b.hits, 0, &b.hits_read, 0, hit_bytes);
             enc.copy_buffer_to_buffer(&b.stats, 0, &b.stats_read, 0, stat_bytes);
@@ -243,14 +227,14 @@ impl Tracer {
             {
                 let err = |what, e: &dyn std::fmt::Display| GpuError::Readback { what, detail: e.to_string() };
                 let view = hit_slice.get_mapped_range().map_err(|e| err("hits", &e))?;
-                hits.extend_from_slice(bytemuck::cast_slice::<u8, Hit>(&view));
+                all_hits.extend_from_slice(bytemuck::cast_slice::<u8, Hit>(&view));
                 let view = stat_slice.get_mapped_range().map_err(|e| err("ray stats", &e))?;
-                stats.extend_from_slice(bytemuck::cast_slice::<u8, RayStats>(&view));
+                all_stats.extend_from_slice(bytemuck::cast_slice::<u8, RayStats>(&view));
             }
             b.hits_read.unmap();
             b.stats_read.unmap();
         }
-        Ok((hits, stats))
+        Ok((all_hits, all_stats))
     }
 }
 

@@ -1,5 +1,5 @@
 //! What an image shows (`--view`), by name on the command line, in the app's settings and in
-//! the test hook, and by code in `ShadeParams.view[0]` for shade.wgsl and its CPU port.
+//! the test hook, and by code in `ShadeParams.view` for shade.wgsl and its CPU port.
 
 /// What the image shows (`--view`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -26,7 +26,7 @@ impl View {
         }
     }
 
-    /// The code `ShadeParams.view[0]` carries to shade.wgsl.
+    /// The code `ShadeParams.view` carries to shade.wgsl.
     pub fn code(self) -> u32 {
         self as u32
     }

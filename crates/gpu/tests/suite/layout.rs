@@ -35,8 +35,13 @@ fn rust_and_wgsl_structs_have_the_same_layout() {
     check!(trace, "Params", GridParams, [grid_min, inv_cell, res, ray_count, mailbox, macro_edge, first_ray, pad]);
     check!(trace, "Node", GpuNode, [res_first]);
     let render = naga::front::wgsl::parse_str(&compose("shade.wgsl").unwrap()).unwrap();
-    check!(render, "Camera", GpuCamera, [eye, right, up, forward]);
-    check!(render, "ShadeParams", ShadeParams, [light, view, depth, tile]);
+    check!(render, "Camera", GpuCamera, [eye, tan_half_vfov, right, width, up, height, forward, aspect]);
+    check!(
+        render,
+        "ShadeParams",
+        ShadeParams,
+        [light, diagonal, view, heat_max, width, height, depth_near, depth_far, first_pixel, pixel_count]
+    );
     // The ray record is also the ray file's.
     assert_eq!(size_of::<GpuRay>(), size_of::<gridrt_scene::Ray>());
 }

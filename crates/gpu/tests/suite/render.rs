@@ -7,7 +7,6 @@ use gridrt_gpu::trace::{read_back, tile_quantum};
 use gridrt_gpu::{FrameTarget, RenderOptions, View};
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{GridConfig, GridKind, Traversal, structure};
-use gridrt_scene::Camera;
 
 use super::common::{default_scene, gpu};
 
@@ -15,23 +14,13 @@ use super::common::{default_scene, gpu};
 fn default_scene_renders_deterministically_and_matches_the_cpu() {
     let Some(ctx) = gpu() else { return };
     let (tris, gpu) = default_scene(ctx);
-    let bounds = gpu.bounds;
     let (w, h) = (320, 240);
-    let camera = Camera::fit(&bounds, w as f32 / h as f32);
-    let cpu_rays = camera_rays(&gpu_camera(&camera, w, h));
+    let opts = RenderOptions::fit(&gpu.bounds, w, h);
+    let cpu_rays = camera_rays(&gpu_camera(&opts.camera, w, h));
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
     for kind in GridKind::ALL {
         let (grid, _) = structure::build(&tris, &GridConfig { kind, ..GridConfig::default() }).unwrap();
         let gs = gpu.upload(&grid).unwrap();
-        let opts = RenderOptions {
-            width: w,
-            height: h,
-            camera,
-            view: View::Shaded,
-            traversal: Traversal::AmanatidesWoo,
-            mailbox: true,
-            heat_max: 64.0,
-        };
         let a = gpu.render(&gs, &opts).unwrap();
         let b = gpu.render(&gs, &opts).unwrap();
         assert_eq!(a.rgba, b.rgba, "{kind}: two renders differ");
@@ -72,25 +61,15 @@ fn default_scene_renders_deterministically_and_matches_the_cpu() {
 fn frames_larger_than_a_tile_render_exactly() {
     let Some(ctx) = gpu() else { return };
     let (tris, gpu) = default_scene(ctx);
-    let bounds = gpu.bounds;
     let (w, h) = (1200, 1000);
     assert!(u64::from(tile_limit(ctx)) < u64::from(w * h), "the frame must need several tiles");
     assert!(tile_limit(ctx) <= MAX_TILE_PIXELS);
-    let camera = Camera::fit(&bounds, w as f32 / h as f32);
     let (grid, _) = structure::build(&tris, &GridConfig::default()).unwrap();
     let gs = gpu.upload(&grid).unwrap();
-    let opts = RenderOptions {
-        width: w,
-        height: h,
-        camera,
-        view: View::Depth,
-        traversal: Traversal::AmanatidesWoo,
-        mailbox: true,
-        heat_max: 64.0,
-    };
+    let opts = RenderOptions { view: View::Depth, ..RenderOptions::fit(&gpu.bounds, w, h) };
     let frame = gpu.render(&gs, &opts).unwrap();
     assert_eq!((frame.hits.len(), frame.rgba.len()), ((w * h) as usize, (w * h * 4) as usize));
-    let rays = camera_rays(&gpu_camera(&camera, w, h));
+    let rays = camera_rays(&gpu_camera(&opts.camera, w, h));
     let (cpu_hits, _) =
         grid.trace_batch(&tris, &rays, TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true }, true);
     let same = frame.hits.iter().zip(&cpu_hits).filter(|(g, c)| g.triangle == c.triangle).count();
@@ -124,10 +103,10 @@ fn write_ppm(path: &std::path::Path, w: u32, h: u32, rgba: &[u8]) {
 fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
     let Some(ctx) = gpu() else { return };
     let (tris, gpu) = default_scene(ctx);
-    let bounds = gpu.bounds;
     // 128 × 4 bytes = 512: rows already meet the 256-byte copy alignment.
     let (w, h) = (128, 96);
-    let camera = Camera::fit(&bounds, w as f32 / h as f32);
+    let fitted = RenderOptions { heat_max: 32.0, ..RenderOptions::fit(&gpu.bounds, w, h) };
+    let camera = fitted.camera;
     let renderer = gpu.renderer().unwrap();
     let (grid, _) = structure::build(&tris, &GridConfig::default()).unwrap();
     let gs = gpu.upload(&grid).unwrap();
@@ -140,15 +119,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
     let topts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
     let (cpu_hits, _) = grid.trace_batch(&tris, &rays, topts, true);
     for view in View::ALL {
-        let opts = RenderOptions {
-            width: w,
-            height: h,
-            camera,
-            view,
-            traversal: Traversal::AmanatidesWoo,
-            mailbox: true,
-            heat_max: 32.0,
-        };
+        let opts = RenderOptions { view, ..fitted };
         let reference = gpu.render(&gs, &opts).unwrap();
         // Twice into the same target as one tile (buffers are reused, totals are cleared per
         // frame), then in tiles of an odd size (starts off any alignment), one submission each.
@@ -202,7 +173,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
             assert_eq!(totals.rays, w * h);
         }
         // CPU shading of the GPU's own hits and stats; shadow rays traced on the CPU.
-        let shade = shade_params(&bounds, &opts);
+        let shade = shade_params(&gpu.bounds, &opts);
         let shadow_rays: Vec<_> = rays.iter().zip(&reference.hits).map(|(r, hit)| shadow_ray(&shade, r, hit)).collect();
         let (shadow_hits, _) = grid.trace_batch(&tris, &shadow_rays, topts, true);
         let mut worst = 0u8;
