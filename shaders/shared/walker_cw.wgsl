@@ -7,27 +7,14 @@ const CW_SCALE: u32 = 1073741824u; // 2^30
 const CW_BEYOND: u32 = 1073741825u;
 
 struct Walker {
-    done: bool,
+    cur: Cursor,
     g: GridRay,
-    res: vec3<i32>,
-    cell: vec3<i32>,
-    step: vec3<i32>,
     dist: vec3<u32>,
     delta: vec3<u32>,
     scale: f32,
     // Output of walker_next.
     out_cell: vec3<i32>,
     out_t_exit: f32,
-}
-
-fn argmin3u(v: vec3<u32>) -> u32 {
-    if v.x <= v.y && v.x <= v.z {
-        return 0u;
-    }
-    if v.y <= v.z {
-        return 1u;
-    }
-    return 2u;
 }
 
 fn cw_to_fixed(x: f32) -> u32 {
@@ -42,20 +29,17 @@ fn cw_to_fixed(x: f32) -> u32 {
 
 fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     var w: Walker;
-    w.done = false;
+    w.cur = cursor_start(g, res_u);
     w.g = g;
-    w.res = vec3<i32>(res_u);
-    let c = cell_at(g, g.t0, res_u);
-    w.cell = c;
+    let c = w.cur.cell;
     let seg = g.t1 - g.t0;
     w.scale = f32(CW_SCALE) * (1.0 / seg);
     let single = seg != seg || seg <= 0.0 || !(w.scale < inf());
     w.dist = vec3<u32>(CW_BEYOND);
     w.delta = vec3<u32>(CW_BEYOND);
     for (var a = 0u; a < 3u; a++) {
-        w.step[a] = sign_step(g.d[a]);
         if g.d[a] == 0.0 || single {
-            w.step[a] = 0;
+            w.cur.step[a] = 0;
             continue;
         }
         let plane = select(f32(c[a]), f32(c[a]) + 1.0, g.d[a] > 0.0);
@@ -68,24 +52,22 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
 
 // Advances to the next cell: sets out_cell / out_t_exit and returns true, or false when done.
 fn walker_next(w: ptr<function, Walker>) -> bool {
-    if (*w).done {
+    if (*w).cur.done {
         return false;
     }
-    let a = argmin3u((*w).dist);
-    let d = (*w).dist[a];
-    (*w).out_cell = (*w).cell;
+    let dv = (*w).dist;
+    let a = argmin3_of(dv.x <= dv.y, dv.x <= dv.z, dv.y <= dv.z);
+    let d = dv[a];
+    (*w).out_cell = (*w).cur.cell;
     if d >= CW_SCALE {
         (*w).out_t_exit = (*w).g.t1;
     } else {
         (*w).out_t_exit = (*w).g.t0 + f32(d) / (*w).scale;
     }
     if d > CW_SCALE {
-        (*w).done = true;
+        (*w).cur.done = true;
     } else {
-        (*w).cell[a] += (*w).step[a];
-        if (*w).cell[a] < 0 || (*w).cell[a] >= (*w).res[a] {
-            (*w).done = true;
-        }
+        (*w).cur = cursor_cross((*w).cur, a);
         (*w).dist[a] = min((*w).dist[a] + (*w).delta[a], CW_BEYOND);
     }
     return true;

@@ -8,11 +8,8 @@ const LIU_ONE: f32 = 1048576.0;
 const LIU_QUEUE: u32 = 8u;
 
 struct Walker {
-    done: bool,
+    cur: Cursor,
     g: GridRay,
-    res: vec3<i32>,
-    cell: vec3<i32>,
-    step: vec3<i32>,
     u: u32,
     v: u32,
     w: u32,
@@ -113,37 +110,40 @@ fn liu_queue_load(w: ptr<function, Walker>, i: u32) -> vec3<i32> {
 fn liu_fill_slice(w: ptr<function, Walker>) {
     let v = (*w).v;
     let ww = (*w).w;
-    (*w).q0 = (*w).cell;
+    let res = (*w).cur.res;
+    var cell = (*w).cur.cell;
+    (*w).q0 = cell;
     (*w).queued = 1u;
     (*w).emitted = 0u;
-    let sv = (*w).step[v];
-    let sw = (*w).step[ww];
-    let tv = liu_target((*w).end.x, sv, (*w).cell[v], (*w).res[v]);
-    let tw = liu_target((*w).end.y, sw, (*w).cell[ww], (*w).res[ww]);
+    let sv = (*w).cur.step[v];
+    let sw = (*w).cur.step[ww];
+    let tv = liu_target((*w).end.x, sv, cell[v], res[v]);
+    let tw = liu_target((*w).end.y, sw, cell[ww], res[ww]);
     loop {
-        if !(((*w).cell[v] != tv || (*w).cell[ww] != tw) && (*w).queued < LIU_QUEUE) {
+        if !((cell[v] != tv || cell[ww] != tw) && (*w).queued < LIU_QUEUE) {
             break;
         }
         var move_v = false;
-        if (*w).cell[v] == tv {
+        if cell[v] == tv {
             move_v = false;
-        } else if (*w).cell[ww] == tw {
+        } else if cell[ww] == tw {
             move_v = true;
         } else {
-            let wall_v = ((*w).cell[v] + select(0, 1, sv > 0)) << LIU_FRAC_BITS;
-            let wall_w = ((*w).cell[ww] + select(0, 1, sw > 0)) << LIU_FRAC_BITS;
+            let wall_v = (cell[v] + select(0, 1, sv > 0)) << LIU_FRAC_BITS;
+            let wall_w = (cell[ww] + select(0, 1, sw > 0)) << LIU_FRAC_BITS;
             let ev = u32(abs((*w).end.x - wall_v));
             let ew = u32(abs((*w).end.y - wall_w));
             move_v = wide_ge(mul_wide(ev, u32(abs((*w).k.y))), mul_wide(ew, u32(abs((*w).k.x))));
         }
         if move_v {
-            (*w).cell[v] += sv;
+            cell[v] += sv;
         } else {
-            (*w).cell[ww] += sw;
+            cell[ww] += sw;
         }
-        liu_queue_store(w, (*w).queued, (*w).cell);
+        liu_queue_store(w, (*w).queued, cell);
         (*w).queued += 1u;
     }
+    (*w).cur.cell = cell;
 }
 
 fn liu_next_slice(w: ptr<function, Walker>) -> bool {
@@ -151,9 +151,8 @@ fn liu_next_slice(w: ptr<function, Walker>) -> bool {
         return false;
     }
     (*w).slices_left -= 1;
-    let u = (*w).u;
-    (*w).cell[u] += (*w).step[u];
-    if (*w).cell[u] < 0 || (*w).cell[u] >= (*w).res[u] {
+    (*w).cur = cursor_cross((*w).cur, (*w).u);
+    if (*w).cur.done {
         return false;
     }
     if (*w).slices_left == 0 {
@@ -167,14 +166,9 @@ fn liu_next_slice(w: ptr<function, Walker>) -> bool {
 
 fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     var w: Walker;
-    w.done = false;
+    w.cur = cursor_start(g, res_u);
     w.g = g;
-    w.res = vec3<i32>(res_u);
-    let c = cell_at(g, g.t0, res_u);
-    w.cell = c;
-    for (var a = 0u; a < 3u; a++) {
-        w.step[a] = sign_step(g.d[a]);
-    }
+    let c = w.cur.cell;
     let u = argmax3(abs(g.d));
     let v = (u + 1u) % 3u;
     let ww = (u + 2u) % 3u;
@@ -184,11 +178,11 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     let end_cell = cell_at(g, g.t1, res_u);
     let p0 = g.o + g.d * g.t0;
     let p1 = g.o + g.d * g.t1;
-    var su = w.step[u];
+    var su = w.cur.step[u];
     if su == 0 {
         su = 1;
     }
-    w.step[u] = su;
+    w.cur.step[u] = su;
     w.slices_left = max((end_cell[u] - c[u]) * su, 0);
     var kv = 0.0;
     var kw = 0.0;
@@ -197,13 +191,13 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
         kw = g.d[ww] * g.inv_d[u];
     }
     w.k = vec2<i32>(liu_fix_slope(kv * f32(su)), liu_fix_slope(kw * f32(su)));
-    w.last = vec2<i32>(liu_fix(p1[v], w.res[v]), liu_fix(p1[ww], w.res[ww]));
+    w.last = vec2<i32>(liu_fix(p1[v], w.cur.res[v]), liu_fix(p1[ww], w.cur.res[ww]));
     if w.slices_left == 0 {
         w.end = w.last;
     } else {
         let wall = f32(select(c[u], c[u] + 1, su > 0));
         let du = wall - p0[u];
-        w.end = vec2<i32>(liu_fix(p0[v] + du * kv, w.res[v]), liu_fix(p0[ww] + du * kw, w.res[ww]));
+        w.end = vec2<i32>(liu_fix(p0[v] + du * kv, w.cur.res[v]), liu_fix(p0[ww] + du * kw, w.cur.res[ww]));
     }
     liu_fill_slice(&w);
     return w;
@@ -211,11 +205,11 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
 
 // Advances to the next cell: sets out_cell / out_t_exit and returns true, or false when done.
 fn walker_next(w: ptr<function, Walker>) -> bool {
-    if (*w).done {
+    if (*w).cur.done {
         return false;
     }
     if (*w).emitted == (*w).queued && !liu_next_slice(w) {
-        (*w).done = true;
+        (*w).cur.done = true;
         return false;
     }
     let c = liu_queue_load(w, (*w).emitted);

@@ -7,71 +7,49 @@
 //! wall index, `t_max = (wall − o) · (1/d)`: no drift, same comparisons, and a form no shader
 //! compiler can contract into an FMA, so the WGSL port takes exactly the same steps.
 
-use glam::{IVec3, UVec3, Vec3};
+use glam::{UVec3, Vec3};
 
-use super::{CellStep, argmin3};
+use super::{CellStep, Cursor, argmin3};
 use crate::geometry::GridRay;
 
 #[derive(Clone, Debug)]
 pub struct AmanatidesWoo {
-    cell: IVec3,
-    step: IVec3,
-    res: IVec3,
+    pub(super) cur: Cursor,
     /// Next wall index per axis (as f32: exact for any resolution ≤ 2^24).
     wall: Vec3,
     o: Vec3,
     inv_d: Vec3,
     t_max: Vec3,
     t1: f32,
-    done: bool,
 }
 
 impl AmanatidesWoo {
     pub fn new(ray: &GridRay, res: UVec3) -> AmanatidesWoo {
-        let c = ray.start_cell(res);
-        let mut step = IVec3::ZERO;
+        let cur = Cursor::start(ray, res);
+        let c = cur.cell.as_vec3();
         let mut wall = Vec3::ZERO;
         let mut t_max = Vec3::INFINITY;
         for a in 0..3 {
             if ray.d[a] != 0.0 {
-                step[a] = if ray.d[a] > 0.0 { 1 } else { -1 };
-                wall[a] = if ray.d[a] > 0.0 { c[a] as f32 + 1.0 } else { c[a] as f32 };
+                wall[a] = if ray.d[a] > 0.0 { c[a] + 1.0 } else { c[a] };
                 t_max[a] = (wall[a] - ray.o[a]) * ray.inv_d[a];
             }
         }
-        AmanatidesWoo {
-            cell: c.as_ivec3(),
-            step,
-            res: res.as_ivec3(),
-            wall,
-            o: ray.o,
-            inv_d: ray.inv_d,
-            t_max,
-            t1: ray.t1,
-            done: false,
-        }
+        AmanatidesWoo { cur, wall, o: ray.o, inv_d: ray.inv_d, t_max, t1: ray.t1 }
     }
-}
 
-impl Iterator for AmanatidesWoo {
-    type Item = CellStep;
+    /// The current cell and its exit; then the next crossing (the cursor is not done).
     #[inline]
-    fn next(&mut self) -> Option<CellStep> {
-        if self.done {
-            return None;
-        }
+    pub(super) fn advance(&mut self) -> Option<CellStep> {
         let a = argmin3(self.t_max.to_array());
         let t = self.t_max[a];
-        let out = CellStep { cell: self.cell.as_uvec3(), t_exit: t.min(self.t1) };
+        let out = CellStep { cell: self.cur.cell.as_uvec3(), t_exit: t.min(self.t1) };
         if t.is_nan() || t > self.t1 {
             // The segment ends inside this cell.
-            self.done = true;
+            self.cur.done = true;
         } else {
-            self.cell[a] += self.step[a];
-            if self.cell[a] < 0 || self.cell[a] >= self.res[a] {
-                self.done = true;
-            }
-            self.wall[a] += self.step[a] as f32;
+            self.cur.cross(a);
+            self.wall[a] += self.cur.step[a] as f32;
             self.t_max[a] = (self.wall[a] - self.o[a]) * self.inv_d[a];
         }
         Some(out)

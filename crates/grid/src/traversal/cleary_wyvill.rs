@@ -11,7 +11,7 @@
 
 use glam::{IVec3, UVec3};
 
-use super::{CellStep, argmin3};
+use super::{CellStep, Cursor, argmin3};
 use crate::geometry::GridRay;
 
 /// Fixed-point length of the clipped segment.
@@ -21,9 +21,7 @@ pub const BEYOND: u32 = SCALE + 1;
 
 #[derive(Clone, Debug)]
 pub struct ClearyWyvill {
-    cell: IVec3,
-    res: IVec3,
-    step: IVec3,
+    pub(super) cur: Cursor,
     stride: IVec3,
     address: i32,
     dist: [u32; 3],
@@ -32,43 +30,47 @@ pub struct ClearyWyvill {
     t1: f32,
     /// Fixed-point units per unit of `t`.
     scale: f32,
-    done: bool,
 }
 
 impl ClearyWyvill {
     pub fn new(ray: &GridRay, res: UVec3) -> ClearyWyvill {
-        let c = ray.start_cell(res);
+        let mut cur = Cursor::start(ray, res);
+        let c = cur.cell;
         let seg = ray.t1 - ray.t0;
         // 2^30 · (1/seg) equals 2^30 / seg exactly, and is what the WGSL port computes.
         let scale = SCALE as f32 * (1.0 / seg);
         let single = seg.is_nan() || seg <= 0.0 || !scale.is_finite();
-        let mut step = IVec3::ZERO;
         let mut dist = [BEYOND; 3];
         let mut delta = [BEYOND; 3];
         for a in 0..3 {
             if ray.d[a] == 0.0 || single {
+                cur.step[a] = 0;
                 continue;
             }
-            step[a] = if ray.d[a] > 0.0 { 1 } else { -1 };
             let plane = if ray.d[a] > 0.0 { c[a] as f32 + 1.0 } else { c[a] as f32 };
             let t_cross = (plane - ray.o[a]) * ray.inv_d[a];
             dist[a] = to_fixed((t_cross - ray.t0) * scale);
             delta[a] = to_fixed(ray.inv_d[a].abs() * scale).max(1);
         }
         let stride = IVec3::new(1, res.x as i32, (res.x * res.y) as i32);
-        ClearyWyvill {
-            cell: c.as_ivec3(),
-            res: res.as_ivec3(),
-            step,
-            stride,
-            address: c.as_ivec3().dot(stride),
-            dist,
-            delta,
-            t0: ray.t0,
-            t1: ray.t1,
-            scale,
-            done: false,
+        ClearyWyvill { cur, stride, address: c.dot(stride), dist, delta, t0: ray.t0, t1: ray.t1, scale }
+    }
+
+    /// The current cell and its exit; then the next crossing (the cursor is not done).
+    #[inline]
+    pub(super) fn advance(&mut self) -> Option<CellStep> {
+        let a = argmin3(self.dist);
+        let d = self.dist[a];
+        let t_exit = if d >= SCALE { self.t1 } else { self.t0 + d as f32 / self.scale };
+        let out = CellStep { cell: self.cur.cell.as_uvec3(), t_exit };
+        if d > SCALE {
+            self.cur.done = true;
+        } else {
+            self.cur.cross(a);
+            self.address += self.stride[a] * self.cur.step[a];
+            self.dist[a] = (self.dist[a] + self.delta[a]).min(BEYOND);
         }
+        Some(out)
     }
 
     /// Linear index of the current cell (x fastest), maintained incrementally.
@@ -86,30 +88,5 @@ fn to_fixed(x: f32) -> u32 {
         x as u32
     } else {
         0
-    }
-}
-
-impl Iterator for ClearyWyvill {
-    type Item = CellStep;
-    #[inline]
-    fn next(&mut self) -> Option<CellStep> {
-        if self.done {
-            return None;
-        }
-        let a = argmin3(self.dist);
-        let d = self.dist[a];
-        let t_exit = if d >= SCALE { self.t1 } else { self.t0 + d as f32 / self.scale };
-        let out = CellStep { cell: self.cell.as_uvec3(), t_exit };
-        if d > SCALE {
-            self.done = true;
-        } else {
-            self.cell[a] += self.step[a];
-            self.address += self.stride[a] * self.step[a];
-            if self.cell[a] < 0 || self.cell[a] >= self.res[a] {
-                self.done = true;
-            }
-            self.dist[a] = (self.dist[a] + self.delta[a]).min(BEYOND);
-        }
-        Some(out)
     }
 }

@@ -15,7 +15,7 @@
 
 use glam::{IVec3, UVec3};
 
-use super::CellStep;
+use super::{CellStep, Cursor};
 use crate::geometry::GridRay;
 use crate::ray::argmax3;
 
@@ -26,13 +26,11 @@ const ONE: f32 = (1u32 << FRAC_BITS) as f32;
 #[derive(Clone, Debug)]
 pub struct Liu {
     ray: GridRay,
-    res: IVec3,
     /// Axis permutation: driving axis, then the two minor axes.
     u: usize,
     v: usize,
     w: usize,
-    step: IVec3,
-    cell: IVec3,
+    pub(super) cur: Cursor,
     /// Slices still to enter after the current one.
     slices_left: i32,
     /// Fixed-point change of (v, w) per slice: d_v / |d_u|, d_w / |d_u|.
@@ -46,7 +44,6 @@ pub struct Liu {
     queue: [IVec3; 8],
     queued: usize,
     emitted: usize,
-    done: bool,
 }
 
 #[inline]
@@ -69,22 +66,13 @@ impl Liu {
         let u = argmax3(ad.to_array());
         let (v, w) = ((u + 1) % 3, (u + 2) % 3);
         let res_i = res.as_ivec3();
-        let start = ray.start_cell(res).as_ivec3();
+        let mut cur = Cursor::start(ray, res);
+        let start = cur.cell;
         let end_cell = ray.end_cell(res).as_ivec3();
         let p0 = ray.o + ray.d * ray.t0;
         let p1 = ray.o + ray.d * ray.t1;
-        let mut step = IVec3::ZERO;
-        for a in 0..3 {
-            step[a] = if ray.d[a] > 0.0 {
-                1
-            } else if ray.d[a] < 0.0 {
-                -1
-            } else {
-                0
-            };
-        }
-        let su = if step[u] == 0 { 1 } else { step[u] };
-        step[u] = su;
+        let su = if cur.step[u] == 0 { 1 } else { cur.step[u] };
+        cur.step[u] = su;
         let slices_left = ((end_cell[u] - start[u]) * su).max(0);
         // d_a · (1/d_u) rather than d_a / d_u: the WGSL port computes the same product (a GPU
         // division need not be correctly rounded, a reciprocal times a product is the same).
@@ -99,23 +87,8 @@ impl Liu {
             let du = wall - p0[u];
             [fix(p0[v] + du * kf(v), res_i[v]), fix(p0[w] + du * kf(w), res_i[w])]
         };
-        let mut liu = Liu {
-            ray: *ray,
-            res: res_i,
-            u,
-            v,
-            w,
-            step,
-            cell: start,
-            slices_left,
-            k,
-            end,
-            last,
-            queue: [IVec3::ZERO; 8],
-            queued: 0,
-            emitted: 0,
-            done: false,
-        };
+        let mut liu =
+            Liu { ray: *ray, u, v, w, cur, slices_left, k, end, last, queue: [IVec3::ZERO; 8], queued: 0, emitted: 0 };
         liu.fill_slice();
         liu
     }
@@ -124,11 +97,11 @@ impl Liu {
     /// minor-wall crossing, in crossing order.
     fn fill_slice(&mut self) {
         let (v, w) = (self.v, self.w);
-        self.queue[0] = self.cell;
+        let Cursor { step, res, .. } = self.cur;
+        self.queue[0] = self.cur.cell;
         self.queued = 1;
         self.emitted = 0;
-        let sv = self.step[v];
-        let sw = self.step[w];
+        let (sv, sw) = (step[v], step[w]);
         let target = |x: i32, s: i32, c: i32, hi: i32| {
             if s == 0 {
                 return c;
@@ -137,29 +110,30 @@ impl Liu {
             // Never walk backwards (a rounding artefact at the very start).
             if (t - c) * s < 0 { c } else { t }
         };
-        let tv = target(self.end[0], sv, self.cell[v], self.res[v]);
-        let tw = target(self.end[1], sw, self.cell[w], self.res[w]);
-        while (self.cell[v] != tv || self.cell[w] != tw) && self.queued < self.queue.len() {
-            let move_v = if self.cell[v] == tv {
+        let tv = target(self.end[0], sv, self.cur.cell[v], res[v]);
+        let tw = target(self.end[1], sw, self.cur.cell[w], res[w]);
+        while (self.cur.cell[v] != tv || self.cur.cell[w] != tw) && self.queued < self.queue.len() {
+            let cell = &mut self.cur.cell;
+            let move_v = if cell[v] == tv {
                 false
-            } else if self.cell[w] == tw {
+            } else if cell[w] == tw {
                 true
             } else {
                 // Overshoot past the next wall at the slice end, divided by the slope, is how
                 // far before the slice end the wall was crossed: the larger one comes first.
-                let wall_v = (self.cell[v] + (sv > 0) as i32) << FRAC_BITS;
-                let wall_w = (self.cell[w] + (sw > 0) as i32) << FRAC_BITS;
+                let wall_v = (cell[v] + (sv > 0) as i32) << FRAC_BITS;
+                let wall_w = (cell[w] + (sw > 0) as i32) << FRAC_BITS;
                 // Exact 64-bit products (the WGSL port multiplies wide in u32 halves).
                 let ev = (self.end[0] - wall_v).unsigned_abs() as u64;
                 let ew = (self.end[1] - wall_w).unsigned_abs() as u64;
                 ev * self.k[1].unsigned_abs() as u64 >= ew * self.k[0].unsigned_abs() as u64
             };
             if move_v {
-                self.cell[v] += sv;
+                cell[v] += sv;
             } else {
-                self.cell[w] += sw;
+                cell[w] += sw;
             }
-            self.queue[self.queued] = self.cell;
+            self.queue[self.queued] = *cell;
             self.queued += 1;
         }
     }
@@ -170,9 +144,8 @@ impl Liu {
             return false;
         }
         self.slices_left -= 1;
-        let u = self.u;
-        self.cell[u] += self.step[u];
-        if self.cell[u] < 0 || self.cell[u] >= self.res[u] {
+        self.cur.cross(self.u);
+        if self.cur.done {
             return false;
         }
         if self.slices_left == 0 {
@@ -191,15 +164,13 @@ fn fix_slope(k: f32) -> i32 {
     (k.clamp(-1.0, 1.0) * ONE + 0.5).floor() as i32
 }
 
-impl Iterator for Liu {
-    type Item = CellStep;
+impl Liu {
+    /// The next queued cell, moving into the next slice when the queue is empty (the cursor is
+    /// not done).
     #[inline]
-    fn next(&mut self) -> Option<CellStep> {
-        if self.done {
-            return None;
-        }
+    pub(super) fn advance(&mut self) -> Option<CellStep> {
         if self.emitted == self.queued && !self.next_slice() {
-            self.done = true;
+            self.cur.done = true;
             return None;
         }
         let c = self.queue[self.emitted].as_uvec3();

@@ -17,7 +17,7 @@ pub mod bresenham;
 pub mod cleary_wyvill;
 pub mod liu;
 
-use glam::UVec3;
+use glam::{IVec3, UVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::GridRay;
@@ -113,6 +113,62 @@ impl Iterator for Walker {
 
 /// Index of the smallest of three values; ties go to the lowest axis (same rule everywhere,
 /// GPU included, so cell sequences are reproducible).
+/// What the exact walkers share: the cell they are in, the grid's resolution, the step
+/// direction per axis and whether the walk has ended. WGSL: `Cursor` in
+/// shaders/shared/walker_common.wgsl.
+#[derive(Clone, Copy, Debug)]
+pub struct Cursor {
+    pub cell: IVec3,
+    pub res: IVec3,
+    pub step: IVec3,
+    pub done: bool,
+}
+
+impl Cursor {
+    /// In the segment's first cell, stepping along the sign of the direction on each axis
+    /// (0 where the ray does not move).
+    pub fn start(ray: &GridRay, res: UVec3) -> Cursor {
+        let step = IVec3::from_array(std::array::from_fn(|a| sign_step(ray.d[a])));
+        Cursor { cell: ray.start_cell(res).as_ivec3(), res: res.as_ivec3(), step, done: false }
+    }
+
+    /// One cell along axis `a`; the walk ends when that leaves the grid.
+    #[inline]
+    pub fn cross(&mut self, a: usize) {
+        self.cell[a] += self.step[a];
+        if self.cell[a] < 0 || self.cell[a] >= self.res[a] {
+            self.done = true;
+        }
+    }
+}
+
+/// -1, 0 or 1 (0 for ±0 and NaN).
+fn sign_step(x: f32) -> i32 {
+    if x > 0.0 {
+        1
+    } else if x < 0.0 {
+        -1
+    } else {
+        0
+    }
+}
+
+/// The exact walkers' `Iterator`: nothing once the cursor is done, else the walker's `advance`.
+macro_rules! cell_iterator {
+    ($($walker:ty),*) => {$(
+        impl Iterator for $walker {
+            type Item = CellStep;
+            #[inline]
+            fn next(&mut self) -> Option<CellStep> {
+                if self.cur.done { None } else { self.advance() }
+            }
+        }
+    )*};
+}
+cell_iterator!(amanatides_woo::AmanatidesWoo, cleary_wyvill::ClearyWyvill, liu::Liu);
+
+/// The axis of the smallest of three values; ties go to the lower axis (x before y before z).
+/// The tie-break every walker shares with its WGSL port (`argmin3_of`).
 #[inline]
 pub(crate) fn argmin3<T: PartialOrd>(v: [T; 3]) -> usize {
     if v[0] <= v[1] && v[0] <= v[2] {
