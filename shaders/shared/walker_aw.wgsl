@@ -17,26 +17,21 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     var w: Walker;
     w.cur = cursor_start(g, res_u);
     w.g = g;
-    let c = w.cur.cell;
     w.t_max = vec3<f32>(inf());
     for (var a = 0u; a < 3u; a++) {
         if g.d[a] != 0.0 {
-            w.wall[a] = select(f32(c[a]), f32(c[a]) + 1.0, g.d[a] > 0.0);
+            w.wall[a] = cursor_wall(w.cur, a);
             w.t_max[a] = (w.wall[a] - g.o[a]) * g.inv_d[a];
         }
     }
     return w;
 }
 
-// Advances to the next cell: sets out_cell / out_t_exit and returns true, or false when done.
-fn walker_next(w: ptr<function, Walker>) -> bool {
-    if (*w).cur.done {
-        return false;
-    }
+// The current cell's exit; then the next crossing.
+fn walker_advance(w: ptr<function, Walker>) -> bool {
     let tm = (*w).t_max;
     let a = argmin3_of(tm.x <= tm.y, tm.x <= tm.z, tm.y <= tm.z);
     let t = tm[a];
-    (*w).out_cell = (*w).cur.cell;
     (*w).out_t_exit = min(t, (*w).g.t1);
     if t != t || t > (*w).g.t1 {
         (*w).cur.done = true;

@@ -1,9 +1,21 @@
 //!include shared/ray.wgsl
 // What the three cell walkers share. Each walker lives in its own file with the same interface
-// (`Walker`, `walker_init`, `walker_next`) and only its own state, and a kernel is composed with
-// the one its pipeline walks (crates/gpu/src/shaders.rs, `{TRAVERSAL}` in an include): a small
-// walker stays in registers, which matters most on the hierarchy stack (one walker per level).
+// (`Walker` holding a `Cursor`, `walker_init`, `walker_advance`) and only its own state, and a
+// kernel is composed with the one its pipeline walks (crates/gpu/src/shaders.rs, `{TRAVERSAL}`
+// in an include): a small walker stays in registers, which matters most on the hierarchy stack
+// (one walker per level).
 // Naive Bresenham is CPU-only (it is incomplete by design).
+
+// Advances to the next cell: sets out_cell / out_t_exit and returns true, or false when done.
+// The walker file's `walker_advance` takes the step (the cursor is not done; out_cell holds the
+// current cell). Rust: the exact walkers' `Iterator` (crates/grid/src/traversal/mod.rs).
+fn walker_next(w: ptr<function, Walker>) -> bool {
+    if (*w).cur.done {
+        return false;
+    }
+    (*w).out_cell = (*w).cur.cell;
+    return walker_advance(w);
+}
 
 // What the walkers share: the cell they are in, the grid's resolution, the step direction per
 // axis and whether the walk has ended. Rust: `Cursor` in crates/grid/src/traversal/mod.rs.
@@ -35,6 +47,11 @@ fn cursor_cross(cur: Cursor, a: u32) -> Cursor {
         c.done = true;
     }
     return c;
+}
+
+// The wall the walk crosses next on axis `a` (as f32: exact for any resolution up to 2^24).
+fn cursor_wall(c: Cursor, a: u32) -> f32 {
+    return f32(c.cell[a] + select(0, 1, c.step[a] > 0));
 }
 
 // The axis of the smallest of three values from their comparisons; ties go to the lower axis.

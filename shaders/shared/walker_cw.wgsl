@@ -31,7 +31,6 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     var w: Walker;
     w.cur = cursor_start(g, res_u);
     w.g = g;
-    let c = w.cur.cell;
     let seg = g.t1 - g.t0;
     w.scale = f32(CW_SCALE) * (1.0 / seg);
     let single = seg != seg || seg <= 0.0 || !(w.scale < inf());
@@ -42,23 +41,18 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
             w.cur.step[a] = 0;
             continue;
         }
-        let plane = select(f32(c[a]), f32(c[a]) + 1.0, g.d[a] > 0.0);
-        let t_cross = (plane - g.o[a]) * g.inv_d[a];
+        let t_cross = (cursor_wall(w.cur, a) - g.o[a]) * g.inv_d[a];
         w.dist[a] = cw_to_fixed((t_cross - g.t0) * w.scale);
         w.delta[a] = max(cw_to_fixed(abs(g.inv_d[a]) * w.scale), 1u);
     }
     return w;
 }
 
-// Advances to the next cell: sets out_cell / out_t_exit and returns true, or false when done.
-fn walker_next(w: ptr<function, Walker>) -> bool {
-    if (*w).cur.done {
-        return false;
-    }
+// The current cell's exit; then the next crossing.
+fn walker_advance(w: ptr<function, Walker>) -> bool {
     let dv = (*w).dist;
     let a = argmin3_of(dv.x <= dv.y, dv.x <= dv.z, dv.y <= dv.z);
     let d = dv[a];
-    (*w).out_cell = (*w).cur.cell;
     if d >= CW_SCALE {
         (*w).out_t_exit = (*w).g.t1;
     } else {

@@ -195,19 +195,15 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     if w.slices_left == 0 {
         w.end = w.last;
     } else {
-        let wall = f32(select(c[u], c[u] + 1, su > 0));
-        let du = wall - p0[u];
+        let du = cursor_wall(w.cur, u) - p0[u];
         w.end = vec2<i32>(liu_fix(p0[v] + du * kv, w.cur.res[v]), liu_fix(p0[ww] + du * kw, w.cur.res[ww]));
     }
     liu_fill_slice(&w);
     return w;
 }
 
-// Advances to the next cell: sets out_cell / out_t_exit and returns true, or false when done.
-fn walker_next(w: ptr<function, Walker>) -> bool {
-    if (*w).cur.done {
-        return false;
-    }
+// The next queued cell, moving into the next slice when the queue is empty.
+fn walker_advance(w: ptr<function, Walker>) -> bool {
     if (*w).emitted == (*w).queued && !liu_next_slice(w) {
         (*w).cur.done = true;
         return false;

@@ -258,18 +258,6 @@ impl Renderer {
         })
     }
 
-    /// Records one whole frame into `enc` as a single tile (see [`Renderer::encode_tile`]).
-    pub fn encode(
-        &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        src: &FrameSource,
-        o: &RenderOptions,
-        t: &FrameTarget,
-    ) -> Result<(), GpuError> {
-        self.encode_tile(ctx, enc, src, o, t, 0..t.pixel_count() as u32)
-    }
-
     /// Records the pixels `pixels` = `[first, first + count)` of a frame (row-major) into `enc`: camera rays,
     /// trace, shadow rays and trace (shaded view), shading, and for a display target the copy
     /// into the texture and the stats totals (cleared by the tile at pixel 0, copied to

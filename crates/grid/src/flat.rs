@@ -11,25 +11,13 @@ use serde::{Deserialize, Serialize};
 use crate::BuildError;
 use crate::build::{BuildOptions, PhaseTimes, bucket};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
+use crate::stats::StructureStats;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FlatGrid {
     pub geom: GridGeometry,
     pub cell_start: Vec<u32>,
     pub refs: Vec<u32>,
-}
-
-/// Size figures of a built grid (`gridrt build`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct FlatGridStats {
-    pub resolution: [u32; 3],
-    pub cells: u64,
-    pub refs: u64,
-    pub empty_cells: u64,
-    pub empty_percent: f64,
-    pub max_refs_per_cell: u32,
-    pub refs_per_triangle: f64,
-    pub memory_bytes: u64,
 }
 
 impl FlatGrid {
@@ -43,24 +31,20 @@ impl FlatGrid {
         (self.cell_start.len() + self.refs.len()) as u64 * 4
     }
 
-    pub fn stats(&self, triangles: usize) -> FlatGridStats {
-        let cells = self.geom.cell_count();
-        let mut empty = 0;
-        let mut max = 0;
-        for w in self.cell_start.windows(2) {
-            let n = w[1] - w[0];
-            empty += (n == 0) as u64;
-            max = max.max(n);
-        }
-        FlatGridStats {
+    /// Size figures of the grid alone (one level).
+    pub fn stats(&self, triangles: usize) -> StructureStats {
+        let empty = self.cell_start.windows(2).filter(|w| w[1] == w[0]).count() as u64;
+        let max = self.cell_start.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+        StructureStats {
             resolution: self.geom.res.to_array(),
-            cells,
-            refs: self.refs.len() as u64,
+            nodes: 1,
+            levels: 1,
+            cells: self.geom.cell_count(),
             empty_cells: empty,
-            empty_percent: 100.0 * empty as f64 / cells as f64,
             max_refs_per_cell: max,
-            refs_per_triangle: self.refs.len() as f64 / triangles.max(1) as f64,
-            memory_bytes: self.memory_bytes(),
+            refs: self.refs.len() as u64,
+            depth_histogram: vec![1],
+            ..StructureStats::sized(self.memory_bytes(), triangles)
         }
     }
 

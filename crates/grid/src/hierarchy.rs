@@ -36,6 +36,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::{GridGeometry, GridRay, INSERT_MARGIN_CELLS};
 use crate::stats::RayStats;
+use crate::stats::{HierarchyStats, StructureStats};
 use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, Walker};
 
@@ -69,22 +70,6 @@ pub struct Hierarchy {
     pub refs: Vec<u32>,
 }
 
-/// Size figures of a hierarchy.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct HierarchyStats {
-    pub nodes: u64,
-    pub levels: u32,
-    pub cells: u64,
-    pub leaves: u64,
-    pub empty_leaves: u64,
-    pub refs: u64,
-    /// Number of grids (nodes) at each depth, top = 0.
-    pub nodes_per_depth: Vec<u64>,
-    /// Number of references held in leaves at each depth.
-    pub refs_per_depth: Vec<u64>,
-    pub memory_bytes: u64,
-}
-
 /// The margin (in cells) a node with accumulated `scale` needs: f32 coordinates of the top grid
 /// (up to its resolution) carry a relative error of a few ulps, magnified by `scale` in child
 /// cells.
@@ -98,31 +83,35 @@ impl Hierarchy {
         (self.nodes.len() * std::mem::size_of::<Node>() + self.cells.len() * 8 + self.refs.len() * 4) as u64
     }
 
-    pub fn stats(&self) -> HierarchyStats {
-        let mut s = HierarchyStats {
+    /// Size figures: nodes per depth in `depth_histogram`, empty leaves in `empty_cells`.
+    pub fn stats(&self, triangles: usize) -> StructureStats {
+        let mut s = StructureStats {
+            resolution: self.geom.res.to_array(),
             nodes: self.nodes.len() as u64,
             cells: self.cells.len() as u64,
             refs: self.refs.len() as u64,
-            ..Default::default()
+            ..StructureStats::sized(self.memory_bytes(), triangles)
         };
+        let mut h = HierarchyStats::default();
         for n in &self.nodes {
             let d = n.depth as usize;
-            if s.nodes_per_depth.len() <= d {
-                s.nodes_per_depth.resize(d + 1, 0);
-                s.refs_per_depth.resize(d + 1, 0);
+            if s.depth_histogram.len() <= d {
+                s.depth_histogram.resize(d + 1, 0);
+                h.refs_per_depth.resize(d + 1, 0);
             }
-            s.nodes_per_depth[d] += 1;
+            s.depth_histogram[d] += 1;
             let count = (n.res.x * n.res.y * n.res.z) as usize;
             for c in &self.cells[n.first_cell as usize..n.first_cell as usize + count] {
                 if c[1] != CHILD {
-                    s.leaves += 1;
-                    s.empty_leaves += (c[1] == 0) as u64;
-                    s.refs_per_depth[d] += c[1] as u64;
+                    h.leaves += 1;
+                    s.empty_cells += (c[1] == 0) as u64;
+                    s.max_refs_per_cell = s.max_refs_per_cell.max(c[1]);
+                    h.refs_per_depth[d] += c[1] as u64;
                 }
             }
         }
-        s.levels = s.nodes_per_depth.len() as u32;
-        s.memory_bytes = self.memory_bytes();
+        s.levels = s.depth_histogram.len() as u32;
+        s.hierarchy = Some(h);
         s
     }
 

@@ -35,8 +35,8 @@ pub use flat::FlatGrid;
 pub use geometry::GridGeometry;
 pub use insert::InsertMode;
 pub use resolution::{CostModel, Resolution, ResolutionChoice};
-pub use stats::{BatchStats, RayStats};
-pub use structure::{AnyGrid, BuildReport, GridConfig, GridKind, StructureStats};
+pub use stats::{BatchStats, HierarchyStats, RayStats, StructureStats};
+pub use structure::{AnyGrid, BuildReport, GridConfig, GridKind};
 pub use trace::TraceOptions;
 pub use traversal::Traversal;
 

@@ -8,12 +8,12 @@ use serde::{Deserialize, Serialize};
 use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
-use crate::hierarchy::{Hierarchy, HierarchyStats};
+use crate::hierarchy::Hierarchy;
 use crate::macrocell::{MacroSample, MacrocellGrid};
 use crate::multires::MultiresOptions;
 use crate::proximity::ProximityGrid;
 use crate::resolution::{self, CostModel, Resolution, ResolutionChoice};
-use crate::stats::{BatchStats, RayStats};
+use crate::stats::{BatchStats, RayStats, StructureStats};
 use crate::trace::{TraceOptions, trace_batch, trace_flat};
 use crate::twolevel::TwoLevelOptions;
 use crate::{BuildError, triangle_bounds_with};
@@ -118,45 +118,6 @@ pub struct BuildReport {
     pub stats: StructureStats,
 }
 
-/// Size figures common to all kinds (`gridrt build --json`).
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct StructureStats {
-    /// Resolution of the flat / fine / top grid.
-    pub resolution: [u32; 3],
-    /// Grids in the structure (1 for flat grids; macro + fine for macrocells).
-    pub nodes: u64,
-    pub levels: u32,
-    /// Cells over all levels.
-    pub cells: u64,
-    pub empty_cells: u64,
-    pub refs: u64,
-    /// Grids per depth (hierarchies), or cells per level (macro, fine) for macrocells.
-    pub depth_histogram: Vec<u64>,
-    pub memory_bytes: u64,
-    pub memory_bytes_per_triangle: f64,
-    /// Macrocell edge, when the structure has macrocells.
-    pub macro_size: Option<u32>,
-    pub occupied_macrocells: Option<u64>,
-    /// Cells whose proximity distance lets a ray jump (distance ≥ 2).
-    pub jump_cells: Option<u64>,
-    pub hierarchy: Option<HierarchyStats>,
-}
-
-fn flat_stats(g: &FlatGrid, n: usize) -> StructureStats {
-    let s = g.stats(n);
-    StructureStats {
-        resolution: s.resolution,
-        nodes: 1,
-        levels: 1,
-        cells: s.cells,
-        empty_cells: s.empty_cells,
-        refs: s.refs,
-        depth_histogram: vec![1],
-        memory_bytes: s.memory_bytes,
-        ..Default::default()
-    }
-}
-
 impl AnyGrid {
     pub fn kind(&self) -> GridKind {
         match self {
@@ -208,9 +169,9 @@ impl AnyGrid {
 
     pub fn stats(&self, triangles: usize) -> StructureStats {
         let mut s = match self {
-            AnyGrid::Flat(g) => flat_stats(g, triangles),
+            AnyGrid::Flat(g) => g.stats(triangles),
             AnyGrid::Macrocell(g) => {
-                let mut s = flat_stats(&g.fine, triangles);
+                let mut s = g.fine.stats(triangles);
                 let macro_cells = g.macro_res.x as u64 * g.macro_res.y as u64 * g.macro_res.z as u64;
                 s.nodes = 2;
                 s.levels = 2;
@@ -220,22 +181,9 @@ impl AnyGrid {
                 s.occupied_macrocells = Some(g.occupied_count());
                 s
             }
-            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => {
-                let hs = h.stats();
-                StructureStats {
-                    resolution: h.geom.res.to_array(),
-                    nodes: hs.nodes,
-                    levels: hs.levels,
-                    cells: hs.cells,
-                    empty_cells: hs.empty_leaves,
-                    refs: hs.refs,
-                    depth_histogram: hs.nodes_per_depth.clone(),
-                    hierarchy: Some(hs),
-                    ..Default::default()
-                }
-            }
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => h.stats(triangles),
             AnyGrid::Proximity(p) => {
-                let mut s = flat_stats(&p.grid, triangles);
+                let mut s = p.grid.stats(triangles);
                 s.jump_cells = Some(p.distance.iter().filter(|&&d| d >= 2).count() as u64);
                 s
             }

@@ -28,7 +28,7 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
             "cells": s.cells,
             "refs": s.refs,
             "empty_cells": s.empty_cells,
-            "empty_percent": 100.0 * s.empty_cells as f64 / s.cells.max(1) as f64,
+            "empty_percent": s.empty_percent(),
             "memory_bytes": s.memory_bytes,
             "memory_bytes_per_triangle": s.memory_bytes_per_triangle,
             "structure": s,

@@ -30,7 +30,7 @@ pub fn run() -> anyhow::Result<()> {
         st.resolution[2],
         choice.curve.len(),
         st.refs,
-        st.empty_percent,
+        st.empty_percent(),
         human_bytes(st.memory_bytes),
         times.total()
     );

@@ -127,7 +127,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
         for round in 0..3 {
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             if round < 2 {
-                renderer.encode(ctx, &mut enc, &gpu.source(&gs), &opts, &target).unwrap();
+                renderer.encode_tile(ctx, &mut enc, &gpu.source(&gs), &opts, &target, 0..w * h).unwrap();
             } else {
                 let n = w * h;
                 let mut first = 0;

@@ -228,7 +228,7 @@ fn gpu_matches_cpu_through_the_deepest_hierarchy() {
     };
     let (grid, _) = structure::build(&tris, &GridConfig { kind: GridKind::Multires, ..cfg }).unwrap();
     let levels = match &grid {
-        AnyGrid::Multires(h) => h.stats().levels,
+        AnyGrid::Multires(h) => h.stats(0).levels,
         _ => unreachable!("built a multires grid"),
     };
     assert_eq!(levels, hierarchy::MAX_DEPTH as u32, "the test hierarchy must reach the deepest level");

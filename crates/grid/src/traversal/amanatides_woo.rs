@@ -26,12 +26,11 @@ pub struct AmanatidesWoo {
 impl AmanatidesWoo {
     pub fn new(ray: &GridRay, res: UVec3) -> AmanatidesWoo {
         let cur = Cursor::start(ray, res);
-        let c = cur.cell.as_vec3();
         let mut wall = Vec3::ZERO;
         let mut t_max = Vec3::INFINITY;
         for a in 0..3 {
             if ray.d[a] != 0.0 {
-                wall[a] = if ray.d[a] > 0.0 { c[a] + 1.0 } else { c[a] };
+                wall[a] = cur.wall(a);
                 t_max[a] = (wall[a] - ray.o[a]) * ray.inv_d[a];
             }
         }

@@ -47,8 +47,7 @@ impl ClearyWyvill {
                 cur.step[a] = 0;
                 continue;
             }
-            let plane = if ray.d[a] > 0.0 { c[a] as f32 + 1.0 } else { c[a] as f32 };
-            let t_cross = (plane - ray.o[a]) * ray.inv_d[a];
+            let t_cross = (cur.wall(a) - ray.o[a]) * ray.inv_d[a];
             dist[a] = to_fixed((t_cross - ray.t0) * scale);
             delta[a] = to_fixed(ray.inv_d[a].abs() * scale).max(1);
         }

@@ -83,8 +83,7 @@ impl Liu {
         let end = if slices_left == 0 {
             last
         } else {
-            let wall = if su > 0 { start[u] + 1 } else { start[u] } as f32;
-            let du = wall - p0[u];
+            let du = cur.wall(u) - p0[u];
             [fix(p0[v] + du * kf(v), res_i[v]), fix(p0[w] + du * kf(w), res_i[w])]
         };
         let mut liu =

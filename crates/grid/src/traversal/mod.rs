@@ -132,6 +132,12 @@ impl Cursor {
         Cursor { cell: ray.start_cell(res).as_ivec3(), res: res.as_ivec3(), step, done: false }
     }
 
+    /// The wall the walk crosses next on axis `a` (as f32: exact for any resolution ≤ 2^24).
+    #[inline]
+    pub fn wall(&self, a: usize) -> f32 {
+        (self.cell[a] + (self.step[a] > 0) as i32) as f32
+    }
+
     /// One cell along axis `a`; the walk ends when that leaves the grid.
     #[inline]
     pub fn cross(&mut self, a: usize) {
