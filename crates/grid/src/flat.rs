@@ -18,9 +18,28 @@ pub struct FlatGrid {
     pub geom: GridGeometry,
     pub cell_start: Vec<u32>,
     pub refs: Vec<u32>,
+    /// One bit per cell (x fastest, 64 cells a word), set when the cell holds references: a
+    /// walk passes empty cells without touching `cell_start` (the survey's macrocell flags at
+    /// cell granularity; most cells of a grid are empty, and the bits fit in cache).
+    pub occupied: Vec<u64>,
 }
 
 impl FlatGrid {
+    /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]`.
+    pub fn new(geom: GridGeometry, cell_start: Vec<u32>, refs: Vec<u32>) -> FlatGrid {
+        let mut occupied = vec![0u64; cell_start.len().saturating_sub(1).div_ceil(64)];
+        for (i, w) in cell_start.windows(2).enumerate() {
+            occupied[i / 64] |= ((w[1] > w[0]) as u64) << (i % 64);
+        }
+        FlatGrid { geom, cell_start, refs, occupied }
+    }
+
+    /// Whether cell `index` holds references.
+    #[inline]
+    pub fn is_occupied(&self, index: usize) -> bool {
+        (self.occupied[index / 64] >> (index % 64)) & 1 != 0
+    }
+
     /// Triangle indices in cell `index`.
     #[inline]
     pub fn cell(&self, index: usize) -> &[u32] {
@@ -28,7 +47,7 @@ impl FlatGrid {
     }
 
     pub fn memory_bytes(&self) -> u64 {
-        (self.cell_start.len() + self.refs.len()) as u64 * 4
+        (self.cell_start.len() + self.refs.len()) as u64 * 4 + self.occupied.len() as u64 * 8
     }
 
     /// Size figures of the grid alone (one level).
@@ -61,9 +80,9 @@ impl FlatGrid {
         #[cfg(feature = "parallel")]
         if opts.parallel {
             let (cell_start, refs) = crate::build::parallel::bucket(tris, &geom, opts.insert, times)?;
-            return Ok(FlatGrid { geom, cell_start, refs });
+            return Ok(FlatGrid::new(geom, cell_start, refs));
         }
         let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;
-        Ok(FlatGrid { geom, cell_start, refs })
+        Ok(FlatGrid::new(geom, cell_start, refs))
     }
 }

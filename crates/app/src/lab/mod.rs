@@ -4,3 +4,4 @@
 pub mod report;
 pub mod scenes;
 pub mod sweep;
+pub mod views;

@@ -1,6 +1,7 @@
 //! `gridrt bench`: every grid kind against the BVHs users would pick instead, in one run, on
-//! the same meshes and the same ray sets (camera rays from the auto camera and random rays in
-//! the bounds): build time, memory per triangle and Mrays/s (CPU, all threads; the GPU too for
+//! the same meshes and the same ray sets (a camera the model fills, a view from inside for
+//! architectural scenes, random rays in the bounds; see [`crate::lab::views`]): build time,
+//! memory per triangle, the hit share of each set and Mrays/s (CPU, all threads; the GPU too for
 //! the grids). Then build time against triangle count (procedural particles, 100k to ≥ 2M), a
 //! check of the auto resolution against a sweep around it, and the targets as ratios
 //! from this one run. Benchmarks print numbers; nothing here asserts a speed.
@@ -17,8 +18,7 @@ use glam::Vec3;
 use gridrt_gpu::GpuContext;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, Resolution, Traversal, structure};
-use gridrt_scene::rays::{camera_rays, random_rays};
-use gridrt_scene::{Camera, Hit, Ray};
+use gridrt_scene::{Hit, Ray};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -26,8 +26,10 @@ use crate::cli::BenchArgs;
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::lab::scenes::{LabScene, default_scenes, procedural_scenes};
 use crate::lab::sweep::{best_of, machine, session};
+use crate::lab::views::{RaySet, hit_share, probe_grid, ray_sets};
 
-/// One structure on one scene.
+/// One structure on one scene and one ray set (its build and memory figures stand on each of its
+/// sets' rows).
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
     pub scene: String,
@@ -41,16 +43,17 @@ pub struct Row {
     pub build_ms: f64,
     pub memory_bytes: u64,
     pub bytes_per_triangle: f64,
-    pub primary_mrays_s: f64,
-    pub random_mrays_s: f64,
-    pub gpu_primary_mrays_s: Option<f64>,
-    pub gpu_random_mrays_s: Option<f64>,
+    pub rays: RaySet,
+    /// Share of the set's rays that hit something.
+    pub hit_share: f64,
+    pub mrays_s: f64,
+    pub gpu_mrays_s: Option<f64>,
     /// Whether the build ran on all threads.
     pub parallel_build: bool,
     /// Whether it intersects triangles with the grids' watertight test (else its own).
     pub shared_triangle_test: bool,
-    /// Rays (both sets) whose hit differs from the flat grid's: another triangle not within
-    /// 1e-5 relative t, or hit vs miss.
+    /// Rays of the set whose hit differs from the flat grid's: another triangle not within 1e-5
+    /// relative t, or hit vs miss.
     pub mismatches: u64,
     /// Of those, the rays where brute force disagrees with the flat grid (the grid is wrong).
     pub flat_wrong: u64,
@@ -147,14 +150,6 @@ fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<LabScene>> {
     Ok(scenes)
 }
 
-/// The two ray sets of a scene.
-pub fn ray_sets(sc: &LabScene, count: usize) -> [(&'static str, Vec<Ray>); 2] {
-    [
-        ("primary", camera_rays(&Camera::fit(&sc.bounds, 4.0 / 3.0), count)),
-        ("random", random_rays(&sc.bounds, count, 7)),
-    ]
-}
-
 #[cfg(feature = "peers")]
 fn par_trace(rays: &[Ray], one: impl Fn(&Ray) -> Hit + Sync) -> Vec<Hit> {
     rays.par_chunks(1024).flat_map_iter(|c| c.iter().map(&one).collect::<Vec<_>>()).collect()
@@ -199,85 +194,78 @@ impl Built {
     }
 }
 
-/// Measures every subject on one scene.
+/// Measures every subject on one scene, on every ray set.
 fn bench_scene(
     sc: &LabScene,
-    sets: &[(&'static str, Vec<Ray>); 2],
+    sets: &[(RaySet, Vec<Ray>)],
     args: &BenchArgs,
     cost: &CostModel,
     gpu: Option<&GpuContext>,
     pb: &indicatif::ProgressBar,
 ) -> anyhow::Result<Vec<Row>> {
     let gpu = session(gpu, sc)?;
-    let mut reference: Option<[Vec<Hit>; 2]> = None;
+    let mut reference: Option<Vec<Vec<Hit>>> = None;
     let mut rows = Vec::new();
     for subject in Subject::all(!args.no_peers) {
         pb.set_message(format!("{} · {}", sc.name, subject.name()));
         let (build_s, built) = best_of(args.repeat as usize, || build(subject, &sc.tris, cost));
         let built = built?;
-        let mut mrays = [0.0; 2];
-        let mut gpu_mrays = [None, None];
-        let mut hits: [Vec<Hit>; 2] = Default::default();
-        for (i, (_, rays)) in sets.iter().enumerate() {
+        let mut speeds = Vec::new();
+        let mut hits = Vec::new();
+        for (_, rays) in sets {
             let (s, h) = best_of(args.repeat as usize, || built.trace(&sc.tris, rays));
-            mrays[i] = rays.len() as f64 / s / 1e6;
-            hits[i] = h;
+            let mut gpu_mrays = None;
             if let (Built::Grid(g, _), Some(gpu)) = (&built, gpu.as_ref()) {
                 let gs = gpu.upload(g)?;
                 // Untimed warm-up: pipeline creation and first upload.
                 gpu.trace(&gs, &rays[..rays.len().min(64)], Traversal::AmanatidesWoo, true)?;
                 let (s, r) = best_of(args.repeat as usize, || gpu.trace(&gs, rays, Traversal::AmanatidesWoo, true));
                 r?;
-                gpu_mrays[i] = Some(rays.len() as f64 / s / 1e6);
+                gpu_mrays = Some(rays.len() as f64 / s / 1e6);
             }
+            speeds.push((rays.len() as f64 / s / 1e6, gpu_mrays));
+            hits.push(h);
         }
         let reference = reference.get_or_insert_with(|| hits.clone());
-        // Every disagreement is settled by brute force (the watertight test on every triangle):
-        // it says whether the flat grid or this structure is wrong.
-        let (mut mismatches, mut flat_wrong) = (0u64, 0u64);
-        for i in 0..2 {
+        let memory = built.memory_bytes();
+        for (i, (set, rays)) in sets.iter().enumerate() {
+            // Every disagreement is settled by brute force (the watertight test on every
+            // triangle): it says whether the flat grid or this structure is wrong.
+            let (mut mismatches, mut flat_wrong) = (0u64, 0u64);
             for (k, (a, b)) in reference[i].iter().zip(&hits[i]).enumerate() {
                 if agree(a, b) {
                     continue;
                 }
                 mismatches += 1;
-                let (truth, _) = gridrt_grid::brute::trace(&sc.tris, &sets[i].1[k]);
-                if !agree(&truth, a) {
-                    flat_wrong += 1;
-                }
+                let (truth, _) = gridrt_grid::brute::trace(&sc.tris, &rays[k]);
+                flat_wrong += u64::from(!agree(&truth, a));
                 if mismatches <= 3 {
+                    let (name, ray) = (subject.name(), rays[k]);
                     log::warn!(
-                        "{} · {}: {} ray {k} {:?}: flat {:?}, this {:?}, brute force {:?}",
-                        sc.name,
-                        subject.name(),
-                        sets[i].0,
-                        sets[i].1[k],
-                        a,
-                        b,
-                        truth
+                        "{} · {name}: {set:?} ray {k} {ray:?}: flat {a:?}, this {b:?}, brute force {truth:?}",
+                        sc.name
                     );
                 }
             }
+            rows.push(Row {
+                scene: sc.name.clone(),
+                kind: sc.kind.clone(),
+                triangles: sc.tris.len(),
+                structure: subject.name(),
+                family: if matches!(subject, Subject::Grid(_)) { "grid" } else { "peer" },
+                build_ms: build_s * 1e3,
+                memory_bytes: memory,
+                bytes_per_triangle: memory as f64 / sc.tris.len() as f64,
+                rays: *set,
+                hit_share: hit_share(&reference[i]),
+                mrays_s: speeds[i].0,
+                gpu_mrays_s: speeds[i].1,
+                parallel_build: subject.parallel_build(),
+                shared_triangle_test: subject.shared_test(),
+                mismatches,
+                flat_wrong,
+            });
         }
-        let memory = built.memory_bytes();
-        rows.push(Row {
-            scene: sc.name.clone(),
-            kind: sc.kind.clone(),
-            triangles: sc.tris.len(),
-            structure: subject.name(),
-            family: if matches!(subject, Subject::Grid(_)) { "grid" } else { "peer" },
-            build_ms: build_s * 1e3,
-            memory_bytes: memory,
-            bytes_per_triangle: memory as f64 / sc.tris.len() as f64,
-            primary_mrays_s: mrays[0],
-            random_mrays_s: mrays[1],
-            gpu_primary_mrays_s: gpu_mrays[0],
-            gpu_random_mrays_s: gpu_mrays[1],
-            parallel_build: subject.parallel_build(),
-            shared_triangle_test: subject.shared_test(),
-            mismatches,
-            flat_wrong,
-        });
         pb.inc(1);
     }
     Ok(rows)
@@ -299,7 +287,7 @@ pub struct AutoPoint {
 /// times both ray sets on the CPU.
 fn auto_check(
     sc: &LabScene,
-    sets: &[(&'static str, Vec<Ray>); 2],
+    sets: &[(RaySet, Vec<Ray>)],
     args: &BenchArgs,
     cost: &CostModel,
 ) -> anyhow::Result<Vec<AutoPoint>> {
@@ -356,8 +344,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let pb = progress((scenes.len() * steps) as u64, "bench");
     let (mut rows, mut auto) = (Vec::new(), Vec::new());
     for sc in &scenes {
-        // One pair of ray sets per scene, shared by every structure and the auto-m sweep.
-        let sets = ray_sets(sc, if args.quick { args.rays.min(20_000) } else { args.rays });
+        // The ray sets of a scene, shared by every structure and the auto-m sweep.
+        pb.set_message(format!("{} · framing", sc.name));
+        let sets = ray_sets(sc, &probe_grid(&sc.tris)?, if args.quick { args.rays.min(20_000) } else { args.rays });
         rows.extend(bench_scene(sc, &sets, &args, &cost, gpu.as_ref(), &pb)?);
         if !args.no_auto_check {
             pb.set_message(format!("{} · auto m sweep", sc.name));
@@ -391,44 +380,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         args.rays,
         args.repeat
     );
-    let f = |v: f64| format!("{v:.2}");
-    let opt = |v: Option<f64>| v.map_or("—".into(), f);
-    let table: Vec<Vec<String>> = rows
-        .iter()
-        .map(|r| {
-            vec![
-                r.scene.trim_end_matches(".glb").to_string(),
-                r.triangles.to_string(),
-                r.structure.clone(),
-                format!("{:.1}", r.build_ms),
-                format!("{:.0}", r.bytes_per_triangle),
-                f(r.primary_mrays_s),
-                f(r.random_mrays_s),
-                opt(r.gpu_primary_mrays_s),
-                opt(r.gpu_random_mrays_s),
-                if r.flat_wrong > 0 {
-                    format!("{} ({} flat)", r.mismatches, r.flat_wrong)
-                } else {
-                    r.mismatches.to_string()
-                },
-            ]
-        })
-        .collect();
-    print_table(
-        &[
-            "scene",
-            "tris",
-            "structure",
-            "build ms",
-            "B/tri",
-            "prim Mr/s",
-            "rand Mr/s",
-            "GPU prim",
-            "GPU rand",
-            "mismatch",
-        ],
-        &table,
-    );
+    print_rows(&rows);
     if !scale.is_empty() {
         println!();
         scaling::print(&scale);
@@ -450,14 +402,20 @@ fn charts(args: &BenchArgs, scenes: &[LabScene], rows: &[Row], scale: &[scaling:
         }
         v
     };
-    type Metric = (&'static str, &'static str, bool, fn(&Row) -> f64);
-    let metrics: [Metric; 4] = [
-        ("bench-primary", "primary rays, Mrays/s (CPU)", true, |r| r.primary_mrays_s),
-        ("bench-random", "random rays, Mrays/s (CPU)", true, |r| r.random_mrays_s),
-        ("bench-build", "build ms", true, |r| r.build_ms),
-        ("bench-memory", "bytes per triangle", true, |r| r.bytes_per_triangle),
+    type Metric = (&'static str, &'static str, bool, RaySet, fn(&Row) -> f64);
+    // Build and memory stand on every set's row: they are read from the random set's.
+    let metrics: [Metric; 5] = [
+        ("bench-framed", "framed camera rays, Mrays/s (CPU)", true, RaySet::Framed, |r| r.mrays_s),
+        ("bench-interior", "interior camera rays, Mrays/s (CPU)", true, RaySet::Interior, |r| r.mrays_s),
+        ("bench-random", "random rays, Mrays/s (CPU)", true, RaySet::Random, |r| r.mrays_s),
+        ("bench-build", "build ms", true, RaySet::Random, |r| r.build_ms),
+        ("bench-memory", "bytes per triangle", true, RaySet::Random, |r| r.bytes_per_triangle),
     ];
-    for (stem, label, log_y, value) in metrics {
+    for (stem, label, log_y, set, value) in metrics {
+        let rows: Vec<&Row> = rows.iter().filter(|r| r.rays == set).collect();
+        if rows.is_empty() {
+            continue;
+        }
         let series = structures
             .iter()
             .map(|s| Series {
@@ -491,4 +449,68 @@ fn charts(args: &BenchArgs, scenes: &[LabScene], rows: &[Row], scale: &[scaling:
         save_chart(&args.out, "bench-scaling", &scaling::chart(scale))?;
     }
     Ok(())
+}
+
+/// The speeds table: a line per structure and scene, a CPU and a GPU column per ray set, then
+/// each scene's hit shares.
+fn print_rows(rows: &[Row]) {
+    let sets = [RaySet::Framed, RaySet::Interior, RaySet::Random];
+    let mut keys: Vec<(&str, &str)> = Vec::new();
+    for r in rows {
+        if !keys.contains(&(r.scene.as_str(), r.structure.as_str())) {
+            keys.push((&r.scene, &r.structure));
+        }
+    }
+    let fixed = |v: Option<f64>| v.map_or("—".into(), |v| format!("{v:.2}"));
+    let table: Vec<Vec<String>> = keys
+        .iter()
+        .map(|&(scene, structure)| {
+            let of = |set| rows.iter().find(|r| r.scene == scene && r.structure == structure && r.rays == set);
+            let first = rows.iter().find(|r| r.scene == scene && r.structure == structure).expect("a row of each key");
+            let (mismatches, flat_wrong) = rows
+                .iter()
+                .filter(|r| r.scene == scene && r.structure == structure)
+                .fold((0, 0), |(m, w), r| (m + r.mismatches, w + r.flat_wrong));
+            let mut line = vec![
+                scene.trim_end_matches(".glb").to_string(),
+                first.triangles.to_string(),
+                structure.to_string(),
+                format!("{:.1}", first.build_ms),
+                format!("{:.0}", first.bytes_per_triangle),
+            ];
+            line.extend(sets.iter().map(|&s| fixed(of(s).map(|r| r.mrays_s))));
+            line.extend(sets.iter().map(|&s| fixed(of(s).and_then(|r| r.gpu_mrays_s))));
+            line.push(if flat_wrong > 0 {
+                format!("{mismatches} ({flat_wrong} flat)")
+            } else {
+                mismatches.to_string()
+            });
+            line
+        })
+        .collect();
+    print_table(
+        &[
+            "scene",
+            "tris",
+            "structure",
+            "build ms",
+            "B/tri",
+            "framed",
+            "interior",
+            "random",
+            "GPU framed",
+            "GPU interior",
+            "GPU random",
+            "mismatch",
+        ],
+        &table,
+    );
+    println!("Mrays/s; hit share of each ray set:");
+    let mut seen: Vec<(&str, RaySet)> = Vec::new();
+    for r in rows.iter().filter(|r| r.structure == "flat") {
+        if !seen.contains(&(r.scene.as_str(), r.rays)) {
+            seen.push((&r.scene, r.rays));
+            println!("  {} {}: {:.0}%", r.scene.trim_end_matches(".glb"), r.rays.name(), r.hit_share * 100.0);
+        }
+    }
 }
