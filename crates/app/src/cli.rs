@@ -231,8 +231,12 @@ pub struct GenArgs {
 pub enum RayKind {
     /// Origins uniform in the scene bounds (+10%), directions uniform on the sphere.
     Random,
-    /// Primary rays of the auto-framed camera, 4:3, row-major.
+    /// Primary rays of the camera that frames the scene bounds (`--camera auto`), 4:3, row-major.
     Camera,
+    /// Primary rays of a camera the model fills (at least 75% of a probe image hits), 4:3.
+    Framed,
+    /// Primary rays of a view along the scene from inside (for buildings), 4:3.
+    Interior,
     /// From one point (--origin, default the bounds centre) aimed at vertices, edge points and random directions.
     Inside,
 }
@@ -313,7 +317,8 @@ pub struct RenderArgs {
     /// Image size WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Camera: auto (frames the scene bounds) or eye_x,eye_y,eye_z,target_x,target_y,target_z,fov.
+    /// Camera: auto (frames the scene bounds), framed (the model fills the image), interior (a
+    /// view along the scene from inside, for buildings) or eye_x,eye_y,eye_z,target_x,target_y,target_z,fov.
     #[arg(long, default_value = "auto", allow_hyphen_values = true)]
     pub camera: String,
     /// Count at the top of the heatmap colour scale (positive).

@@ -14,6 +14,16 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
     let rays = match args.kind {
         RayKind::Random => random_rays(&bounds, args.count, args.seed),
         RayKind::Camera => camera_rays(&Camera::fit(&bounds, 4.0 / 3.0), args.count),
+        RayKind::Framed => {
+            let tris = mesh.triangles();
+            let probe = crate::lab::views::probe_grid(&tris)?;
+            camera_rays(&crate::lab::views::framed_camera(&tris, &bounds, &probe, 4.0 / 3.0), args.count)
+        }
+        RayKind::Interior => {
+            let tris = mesh.triangles();
+            let probe = crate::lab::views::probe_grid(&tris)?;
+            camera_rays(&crate::lab::views::interior_camera(&tris, &bounds, &probe), args.count)
+        }
         RayKind::Inside => {
             let origin = match &args.origin {
                 Some(s) => parse_vec3(s)?,

@@ -20,12 +20,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         need <= budget,
         "--size {width}x{height} needs {need} bytes of frame memory, more than the budget of {budget} bytes (a quarter of memory)"
     );
-    let camera = if args.camera == "auto" {
-        Camera::fit(&bounds, width as f32 / height as f32)
-    } else {
-        Camera::parse(&args.camera).map_err(|e| anyhow::anyhow!("--camera: {e}"))?
-    };
     let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
+    let aspect = width as f32 / height as f32;
+    let camera = match args.camera.as_str() {
+        "auto" => Camera::fit(&bounds, aspect),
+        "framed" => crate::lab::views::framed_camera(&tris, &bounds, &grid, aspect),
+        "interior" => crate::lab::views::interior_camera(&tris, &bounds, &grid),
+        s => Camera::parse(s).map_err(|e| anyhow::anyhow!("--camera: {e}"))?,
+    };
     let ctx = super::gpu_context()?;
     let gpu = GpuSession::new(&ctx, &tris, bounds)?;
     let gs = gpu.upload(&grid)?;

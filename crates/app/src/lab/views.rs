@@ -41,9 +41,10 @@ impl RaySet {
 /// The ray sets of `sc`, `count` rays each: framed, interior (architectural scenes only) and
 /// random. `probe` is a structure over `sc.tris` the framing traces its probe images with.
 pub fn ray_sets(sc: &LabScene, probe: &AnyGrid, count: usize) -> Vec<(RaySet, Vec<Ray>)> {
-    let mut sets = vec![(RaySet::Framed, camera_rays(&framed_camera(&sc.tris, &sc.bounds, probe), count))];
+    let framed = framed_camera(&sc.tris, &sc.bounds, probe, 4.0 / 3.0);
+    let mut sets = vec![(RaySet::Framed, camera_rays(&framed, count))];
     if sc.kind.starts_with("architectural") {
-        sets.push((RaySet::Interior, camera_rays(&interior_camera(&sc.bounds), count)));
+        sets.push((RaySet::Interior, camera_rays(&interior_camera(&sc.tris, &sc.bounds, probe), count)));
     }
     sets.push((RaySet::Random, random_rays(&sc.bounds, count, 7)));
     sets
@@ -59,15 +60,14 @@ pub fn hit_share(hits: &[Hit]) -> f64 {
     hits.iter().filter(|h| h.is_hit()).count() as f64 / hits.len().max(1) as f64
 }
 
-/// A 4:3 camera the model fills: from [`Camera::fit`]'s eye, turned towards the centre of the
+/// A camera for images of `aspect` (width / height) that the model fills: from [`Camera::fit`]'s eye, turned towards the centre of the
 /// hit pixels of a small probe image and narrowed to their extent (or zoomed in when they
 /// already span the image), until [`FRAMED_HIT_SHARE`] of the probe rays hit. An empty probe
 /// keeps the camera it has.
-pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Camera {
-    const ASPECT: f32 = 4.0 / 3.0;
-    let (w, h) = (96u32, 72u32);
+pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect: f32) -> Camera {
+    let (w, h) = (96u32, ((96.0 / aspect).round() as u32).clamp(8, 960));
     let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
-    let mut cam = Camera::fit(bounds, ASPECT);
+    let mut cam = Camera::fit(bounds, aspect);
     for _ in 0..16 {
         let (hits, _) = probe.trace_batch(tris, &image_rays(&cam, w, h), opts, true);
         // The hit pixels' box in image coordinates, [-1, 1] on both axes, y up.
@@ -85,12 +85,12 @@ pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Came
         let right = fwd.cross(cam.up).normalize();
         let up = right.cross(fwd);
         let half_v = (cam.vfov_deg.to_radians() * 0.5).tan();
-        let half_h = half_v * ASPECT;
+        let half_h = half_v * aspect;
         let centre = (lo + hi) * 0.5;
         let dir = (fwd + right * (centre.x * half_h) + up * (centre.y * half_v)).normalize();
         // Half the box, plus a pixel, in tangent units.
         let half_box = (hi - lo) * 0.5 + glam::Vec2::new(1.0 / w as f32, 1.0 / h as f32);
-        let mut new_half_v = (half_box.y * half_v).max(half_box.x * half_h / ASPECT);
+        let mut new_half_v = (half_box.y * half_v).max(half_box.x * half_h / aspect);
         if new_half_v > 0.95 * half_v {
             new_half_v = 0.85 * half_v;
         }
@@ -101,15 +101,30 @@ pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Came
     cam
 }
 
-/// The classic view along an architectural scene: from a tenth of the way in along its longer
-/// horizontal axis, at 30% of its height, looking to the far end (glTF's +y is up).
-pub fn interior_camera(bounds: &Aabb) -> Camera {
+/// A view along an architectural scene from inside, looking down its longer horizontal axis
+/// (glTF's +y is up) with a 60° field of view: of the eyes on that axis' centre line between a
+/// tenth and half of the way in, at 15% or 30% of the height, the one whose small probe image
+/// sees deepest (the largest median hit distance; a wall in front of the eye sees nothing).
+pub fn interior_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Camera {
     let (lo, ext, c) = (bounds.min, bounds.max - bounds.min, bounds.center());
-    let y = lo.y + 0.3 * ext.y;
-    let (eye, target) = if ext.x >= ext.z {
-        (Vec3::new(lo.x + 0.1 * ext.x, y, c.z), Vec3::new(bounds.max.x, y, c.z))
-    } else {
-        (Vec3::new(c.x, y, lo.z + 0.1 * ext.z), Vec3::new(c.x, y, bounds.max.z))
+    let along_x = ext.x >= ext.z;
+    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let camera = |f: f32, h: f32| {
+        let y = lo.y + h * ext.y;
+        let (eye, target) = if along_x {
+            (Vec3::new(lo.x + f * ext.x, y, c.z), Vec3::new(bounds.max.x, y, c.z))
+        } else {
+            (Vec3::new(c.x, y, lo.z + f * ext.z), Vec3::new(c.x, y, bounds.max.z))
+        };
+        Camera { eye, target, up: Vec3::Y, vfov_deg: 60.0 }
     };
-    Camera { eye, target, up: Vec3::Y, vfov_deg: 60.0 }
+    let depth = |cam: &Camera| {
+        let (hits, _) = probe.trace_batch(tris, &image_rays(cam, 32, 24), opts, true);
+        let rays = image_rays(cam, 32, 24);
+        let mut d: Vec<f32> = hits.iter().zip(&rays).map(|(h, r)| h.t * r.d().length()).collect();
+        d.sort_by(f32::total_cmp);
+        d[d.len() / 2]
+    };
+    let candidates = [0.1f32, 0.2, 0.3, 0.4, 0.5].into_iter().flat_map(|f| [0.15f32, 0.3].map(|h| camera(f, h)));
+    candidates.max_by(|a, b| depth(a).total_cmp(&depth(b))).expect("candidates")
 }

@@ -19,7 +19,6 @@ use gridrt_gpu::GpuContext;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, Resolution, Traversal, structure};
 use gridrt_scene::{Hit, Ray};
-use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cli::BenchArgs;
@@ -150,11 +149,6 @@ fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<LabScene>> {
     Ok(scenes)
 }
 
-#[cfg(feature = "peers")]
-fn par_trace(rays: &[Ray], one: impl Fn(&Ray) -> Hit + Sync) -> Vec<Hit> {
-    rays.par_chunks(1024).flat_map_iter(|c| c.iter().map(&one).collect::<Vec<_>>()).collect()
-}
-
 /// A built subject, ready to trace.
 enum Built {
     Grid(AnyGrid, u64),
@@ -189,7 +183,7 @@ impl Built {
                 g.trace_batch(tris, rays, opts, true).0
             }
             #[cfg(feature = "peers")]
-            Built::Peer(p) => par_trace(rays, |r| p.trace(tris, r)),
+            Built::Peer(p) => p.trace_batch(tris, rays),
         }
     }
 }

@@ -15,6 +15,12 @@
 //!   children beyond the current closest hit skipped.
 //! - obvhs' callbacks receive a slot in `primitive_indices`, not the triangle id: remapped.
 //! - obvhs' CWBVH ignores `ray.tmin` in its box tests; the shared triangle test enforces it.
+//!
+//! With the `embree` feature (Debian's libembree-dev 3.13 through the `embree3` crate), Embree
+//! joins as two rows: single rays (`rtcIntersect1`) and 8-ray packets (`rtcIntersect8`), both on
+//! its default medium-quality build with the robust (watertight) flag and its own triangle test,
+//! so its hits are compared like the "own test" row. Its memory is what its memory monitor saw
+//! allocated by the build, less the vertex and index buffers.
 
 use std::time::Duration;
 
@@ -44,15 +50,25 @@ pub enum PeerKind {
     ObvhsCwbvh,
     /// The same CWBVH traced with obvhs' own f32 triangle test (not watertight).
     ObvhsCwbvhOwnTest,
+    /// Embree 3 (robust scene, medium build), one ray at a time.
+    #[cfg(feature = "embree")]
+    Embree,
+    /// Embree 3, the same scene, rays in packets of 8.
+    #[cfg(feature = "embree")]
+    EmbreePacket8,
 }
 
 impl PeerKind {
-    pub const ALL: [PeerKind; 5] = [
+    pub const ALL: &[PeerKind] = &[
         PeerKind::Bvh,
         PeerKind::ObvhsFastest,
         PeerKind::ObvhsMedium,
         PeerKind::ObvhsCwbvh,
         PeerKind::ObvhsCwbvhOwnTest,
+        #[cfg(feature = "embree")]
+        PeerKind::Embree,
+        #[cfg(feature = "embree")]
+        PeerKind::EmbreePacket8,
     ];
 
     pub fn name(self) -> &'static str {
@@ -62,17 +78,29 @@ impl PeerKind {
             PeerKind::ObvhsMedium => "obvhs BVH2 medium",
             PeerKind::ObvhsCwbvh => "obvhs CWBVH medium",
             PeerKind::ObvhsCwbvhOwnTest => "obvhs CWBVH medium, own test",
+            #[cfg(feature = "embree")]
+            PeerKind::Embree => "Embree 3 (own test)",
+            #[cfg(feature = "embree")]
+            PeerKind::EmbreePacket8 => "Embree 3 packets of 8 (own test)",
         }
     }
 
     /// Whether the peer uses the grids' triangle test (its hits must then equal the grids').
     pub fn shared_test(self) -> bool {
+        #[cfg(feature = "embree")]
+        if matches!(self, PeerKind::Embree | PeerKind::EmbreePacket8) {
+            return false;
+        }
         self != PeerKind::ObvhsCwbvhOwnTest
     }
 
     /// Whether the library's build runs on all threads (`bvh`'s `build_par`; obvhs' `parallel`
     /// feature is off: on 2 cores its threads only add contention).
     pub fn parallel_build(self) -> bool {
+        #[cfg(feature = "embree")]
+        if matches!(self, PeerKind::Embree | PeerKind::EmbreePacket8) {
+            return true;
+        }
         self == PeerKind::Bvh
     }
 }
@@ -101,9 +129,17 @@ impl BHShape<f32, 3> for Shape {
 
 /// A built peer structure.
 pub enum PeerBvh {
-    Bvh { bvh: Bvh<f32, 3>, shapes: usize },
+    Bvh {
+        bvh: Bvh<f32, 3>,
+        shapes: usize,
+    },
     Bvh2(Bvh2),
-    Cw { bvh: CwBvh, tris: Option<Vec<Triangle>> },
+    Cw {
+        bvh: CwBvh,
+        tris: Option<Vec<Triangle>>,
+    },
+    #[cfg(feature = "embree")]
+    Embree(embree::EmbreeScene),
 }
 
 impl std::fmt::Debug for PeerBvh {
@@ -144,6 +180,10 @@ pub fn build(kind: PeerKind, tris: &[[Vec3; 3]]) -> PeerBvh {
             let ot = obvhs_tris(tris);
             let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(&ot, BvhBuildParams::medium_build(), &mut core);
             PeerBvh::Cw { bvh, tris: (kind == PeerKind::ObvhsCwbvhOwnTest).then_some(ot) }
+        }
+        #[cfg(feature = "embree")]
+        PeerKind::Embree | PeerKind::EmbreePacket8 => {
+            PeerBvh::Embree(embree::EmbreeScene::build(tris, kind == PeerKind::EmbreePacket8))
         }
     }
 }
@@ -211,7 +251,19 @@ impl PeerBvh {
                     + v(bvh.primitive_indices.len(), 4)
                     + tris.as_ref().map_or(0, |t| v(t.len(), size_of::<Triangle>()))
             }
+            #[cfg(feature = "embree")]
+            PeerBvh::Embree(e) => e.memory_bytes,
         }
+    }
+
+    /// The closest hits of `rays`, on all threads.
+    pub fn trace_batch(&self, tris: &[[Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
+        use rayon::prelude::*;
+        #[cfg(feature = "embree")]
+        if let PeerBvh::Embree(e) = self {
+            return rays.par_chunks(1024).flat_map_iter(|c| e.trace(c)).collect();
+        }
+        rays.par_chunks(1024).flat_map_iter(|c| c.iter().map(|r| self.trace(tris, r)).collect::<Vec<_>>()).collect()
     }
 
     /// The closest hit of `ray` (a miss for rays no triangle can be hit by).
@@ -278,7 +330,118 @@ impl PeerBvh {
                 }
                 return Hit::MISS;
             }
+            #[cfg(feature = "embree")]
+            PeerBvh::Embree(e) => return e.trace(std::slice::from_ref(ray))[0],
         }
         best.hit
+    }
+}
+
+#[cfg(feature = "embree")]
+mod embree {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicI64, Ordering};
+
+    use embree3::{
+        BufferUsage, BuildQuality, Device, Format, GeometryKind, Hit8, IntersectContext, Ray8, RayHit, RayHit8,
+        SceneFlags, ValidMask, ValidMaskN,
+    };
+    use glam::Vec3;
+    use gridrt_grid::ray::PreparedRay;
+    use gridrt_scene::{Hit, Ray};
+
+    /// A committed Embree scene over the triangles (unshared vertices, one geometry).
+    pub struct EmbreeScene {
+        scene: embree3::Scene<'static>,
+        /// Trace in packets of 8.
+        packets: bool,
+        pub memory_bytes: u64,
+    }
+
+    impl EmbreeScene {
+        pub fn build(tris: &[[Vec3; 3]], packets: bool) -> EmbreeScene {
+            let device = Device::new().expect("Embree device");
+            let allocated = Arc::new(AtomicI64::new(0));
+            let counter = allocated.clone();
+            device.set_memory_monitor_function(move |bytes, _post| {
+                counter.fetch_add(bytes as i64, Ordering::Relaxed);
+                true
+            });
+            let mut scene = device.create_scene().expect("Embree scene");
+            scene.set_flags(SceneFlags::ROBUST);
+            scene.set_build_quality(BuildQuality::MEDIUM);
+            let n = tris.len().max(1);
+            let mut geom = device.create_geometry(GeometryKind::TRIANGLE).expect("Embree geometry");
+            let vertices: Vec<[f32; 3]> = tris.iter().flat_map(|t| t.map(|v| v.to_array())).collect();
+            let mut vb = geom
+                .set_new_buffer::<[f32; 3]>(BufferUsage::VERTEX, 0, Format::FLOAT3, 12, 3 * n)
+                .expect("Embree vertex buffer");
+            vb[..vertices.len()].copy_from_slice(&vertices);
+            let mut ib = geom
+                .set_new_buffer::<[u32; 3]>(BufferUsage::INDEX, 0, Format::UINT3, 12, n)
+                .expect("Embree index buffer");
+            for (i, t) in ib.iter_mut().enumerate().take(tris.len()) {
+                let k = 3 * i as u32;
+                *t = [k, k + 1, k + 2];
+            }
+            let buffers = allocated.load(Ordering::Relaxed);
+            let geom = geom.commit();
+            scene.attach_geometry(&geom);
+            scene.commit();
+            let memory_bytes = (allocated.load(Ordering::Relaxed) - buffers).max(0) as u64;
+            device.unset_memory_monitor_function();
+            EmbreeScene { scene, packets, memory_bytes }
+        }
+
+        /// The closest hits of `rays` (rays no triangle can be hit by miss, as for the grids).
+        pub fn trace(&self, rays: &[Ray]) -> Vec<Hit> {
+            let to_hit = |t: f32, prim: u32, u: f32, v: f32| {
+                if prim == embree3::INVALID_ID { Hit::MISS } else { Hit { t, triangle: prim, u, v } }
+            };
+            if !self.packets {
+                let mut ctx = IntersectContext::incoherent();
+                return rays
+                    .iter()
+                    .map(|r| {
+                        if PreparedRay::new(r).is_none() {
+                            return Hit::MISS;
+                        }
+                        let mut rh = RayHit::from(embree3::Ray::segment(r.o().into(), r.d().into(), r.tmin, r.tmax));
+                        self.scene.intersect(&mut ctx, &mut rh);
+                        to_hit(rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v)
+                    })
+                    .collect();
+            }
+            /// rtcIntersect8 reads its valid mask with 32-byte loads; `ValidMaskN` is only
+            /// 16-byte aligned.
+            #[repr(C, align(32))]
+            struct Mask8(ValidMaskN<8>);
+            let mut ctx = IntersectContext::coherent();
+            let mut out = Vec::with_capacity(rays.len());
+            for group in rays.chunks(8) {
+                let mut mask = Mask8(ValidMaskN::<8>::all_active());
+                let valid = &mut mask.0;
+                let (mut org, mut dir, mut tnear, mut tfar) =
+                    ([[0.0; 3]; 8], [[0.0, 0.0, 1.0]; 8], [0.0; 8], [-1.0; 8]);
+                for (i, r) in group.iter().enumerate() {
+                    (org[i], dir[i], tnear[i], tfar[i]) = (r.o().into(), r.d().into(), r.tmin, r.tmax);
+                }
+                for i in 0..8 {
+                    if i >= group.len() || PreparedRay::new(&group[i]).is_none() {
+                        valid.lanes_mut()[i] = ValidMask::Invalid;
+                    }
+                }
+                let mut rh = RayHit8 { ray: Ray8::segment(org, dir, tnear, tfar), hit: Hit8::new() };
+                self.scene.intersect8(&mut ctx, &mut rh, valid);
+                for i in 0..group.len() {
+                    out.push(if valid.lanes_mut()[i] == ValidMask::Invalid {
+                        Hit::MISS
+                    } else {
+                        to_hit(rh.ray.tfar[i], rh.hit.primID[i], rh.hit.u[i], rh.hit.v[i])
+                    });
+                }
+            }
+            out
+        }
     }
 }
