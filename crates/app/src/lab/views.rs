@@ -104,7 +104,8 @@ pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect:
 /// A view along an architectural scene from inside, looking down its longer horizontal axis
 /// (glTF's +y is up) with a 60° field of view: of the eyes on that axis' centre line between a
 /// tenth and half of the way in, at 15% or 30% of the height, the one whose small probe image
-/// sees deepest (the largest median hit distance; a wall in front of the eye sees nothing).
+/// sees deepest (the largest median hit distance, a miss counting as 0: a wall in front of the
+/// eye or an open side both see nothing).
 pub fn interior_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Camera {
     let (lo, ext, c) = (bounds.min, bounds.max - bounds.min, bounds.center());
     let along_x = ext.x >= ext.z;
@@ -121,7 +122,9 @@ pub fn interior_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Ca
     let depth = |cam: &Camera| {
         let (hits, _) = probe.trace_batch(tris, &image_rays(cam, 32, 24), opts, true);
         let rays = image_rays(cam, 32, 24);
-        let mut d: Vec<f32> = hits.iter().zip(&rays).map(|(h, r)| h.t * r.d().length()).collect();
+        // A miss counts as no depth: looking out of an open side is not looking along the inside.
+        let mut d: Vec<f32> =
+            hits.iter().zip(&rays).map(|(h, r)| if h.is_hit() { h.t * r.d().length() } else { 0.0 }).collect();
         d.sort_by(f32::total_cmp);
         d[d.len() / 2]
     };
