@@ -7,6 +7,7 @@ pub mod calibration;
 use gridrt_grid::multires::MultiresOptions;
 use gridrt_grid::twolevel::TwoLevelOptions;
 use gridrt_grid::{BuildOptions, CostModel, GridConfig, InsertMode};
+#[cfg(not(target_arch = "wasm32"))]
 use gridrt_scene::LoadLimits;
 
 use crate::cli::{Cli, GridArgs};
@@ -75,7 +76,8 @@ impl GridArgs {
 }
 
 impl Cli {
-    /// The scene load limits these flags describe.
+    /// The scene load limits these flags describe (the command line's; the browser has none).
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn load_limits(&self) -> LoadLimits {
         let d = LoadLimits::default();
         LoadLimits {
