@@ -27,10 +27,19 @@ pub struct FlatGrid {
 impl FlatGrid {
     /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]`.
     pub fn new(geom: GridGeometry, cell_start: Vec<u32>, refs: Vec<u32>) -> FlatGrid {
-        let mut occupied = vec![0u64; cell_start.len().saturating_sub(1).div_ceil(64)];
-        for (i, w) in cell_start.windows(2).enumerate() {
-            occupied[i / 64] |= ((w[1] > w[0]) as u64) << (i % 64);
-        }
+        let cells = cell_start.len().saturating_sub(1);
+        // Word k holds cells 64k … 64k + 63: 65 offsets, compared pairwise.
+        let word = |k: usize| {
+            let s = &cell_start[64 * k..(64 * k + 65).min(cells + 1)];
+            s.windows(2).enumerate().fold(0u64, |w, (j, p)| w | (((p[1] > p[0]) as u64) << j))
+        };
+        #[cfg(feature = "parallel")]
+        let occupied = {
+            use rayon::prelude::*;
+            (0..cells.div_ceil(64)).into_par_iter().map(word).collect()
+        };
+        #[cfg(not(feature = "parallel"))]
+        let occupied = (0..cells.div_ceil(64)).map(word).collect();
         FlatGrid { geom, cell_start, refs, occupied }
     }
 
@@ -52,15 +61,14 @@ impl FlatGrid {
 
     /// Size figures of the grid alone (one level).
     pub fn stats(&self, triangles: usize) -> StructureStats {
-        let empty = self.cell_start.windows(2).filter(|w| w[1] == w[0]).count() as u64;
-        let max = self.cell_start.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+        let cells = self.geom.cell_count();
+        let occupied: u64 = self.occupied.iter().map(|w| w.count_ones() as u64).sum();
         StructureStats {
             resolution: self.geom.res.to_array(),
             nodes: 1,
             levels: 1,
-            cells: self.geom.cell_count(),
-            empty_cells: empty,
-            max_refs_per_cell: max,
+            cells,
+            empty_cells: cells - occupied,
             refs: self.refs.len() as u64,
             depth_histogram: vec![1],
             ..StructureStats::sized(self.memory_bytes(), triangles)

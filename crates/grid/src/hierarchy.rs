@@ -105,7 +105,6 @@ impl Hierarchy {
                 if c[1] != CHILD {
                     h.leaves += 1;
                     s.empty_cells += (c[1] == 0) as u64;
-                    s.max_refs_per_cell = s.max_refs_per_cell.max(c[1]);
                     h.refs_per_depth[d] += c[1] as u64;
                 }
             }

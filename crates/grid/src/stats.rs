@@ -56,8 +56,6 @@ pub struct StructureStats {
     pub cells: u64,
     /// Empty cells (leaves, in a hierarchy).
     pub empty_cells: u64,
-    /// The most references one cell (leaf) holds.
-    pub max_refs_per_cell: u32,
     pub refs: u64,
     /// Grids per depth (hierarchies), or cells per level (macro, fine) for macrocells.
     pub depth_histogram: Vec<u64>,
