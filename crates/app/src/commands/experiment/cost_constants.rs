@@ -77,20 +77,22 @@ fn lsq_subset(points: &[(f64, f64, f64)], active: &[usize]) -> Option<[f64; 3]> 
     Some(out)
 }
 
-/// Least squares of y = a + b·x1 + c·x2 with a, b, c ≥ 0 (times cannot be negative): the best
-/// of the fits over every subset of free coefficients whose coefficients are all non-negative.
+/// Least squares of y = a + b·x1 + c·x2 with a ≥ 0 and b, c > 0: times cannot be negative, and
+/// a cost model without a step or a test cost has no optimum (a calibration with Tstep = 0 is
+/// refused when loaded). The better of the full fit and the fit with a = 0, among those whose
+/// coefficients qualify; `None` when neither does (the data cannot separate the constants).
 pub fn fit3(points: &[(f64, f64, f64)]) -> Option<Fit> {
     if points.len() < 3 {
         return None;
     }
     let sse = |c: &[f64; 3]| points.iter().map(|&(x1, x2, y)| (c[0] + c[1] * x1 + c[2] * x2 - y).powi(2)).sum::<f64>();
-    let subsets: [&[usize]; 7] = [&[0, 1, 2], &[1, 2], &[0, 1], &[0, 2], &[1], &[2], &[0]];
+    let subsets: [&[usize]; 2] = [&[0, 1, 2], &[1, 2]];
     // The unconstrained fit must be determined, else the data cannot separate the constants.
     lsq_subset(points, &[0, 1, 2])?;
     let [a, b, c] = subsets
         .iter()
         .filter_map(|s| lsq_subset(points, s))
-        .filter(|c| c.iter().all(|&v| v >= 0.0))
+        .filter(|c| c[0] >= 0.0 && c[1] > 0.0 && c[2] > 0.0)
         .min_by(|x, y| sse(x).total_cmp(&sse(y)))?;
     let mean = points.iter().map(|p| p.2).sum::<f64>() / points.len() as f64;
     let (mut ss_res, mut ss_tot, mut rel) = (0.0, 0.0, 0.0);
