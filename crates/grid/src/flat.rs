@@ -49,9 +49,13 @@ impl FlatGrid {
         (self.occupied[index / 64] >> (index % 64)) & 1 != 0
     }
 
-    /// Triangle indices in cell `index`.
+    /// Triangle indices in cell `index`; an empty cell costs a bit test, not a `cell_start`
+    /// load.
     #[inline]
     pub fn cell(&self, index: usize) -> &[u32] {
+        if !self.is_occupied(index) {
+            return &[];
+        }
         &self.refs[self.cell_start[index] as usize..self.cell_start[index + 1] as usize]
     }
 

@@ -42,10 +42,7 @@ pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOpt
 fn walk_flat(walker: impl Iterator<Item = CellStep>, grid: &FlatGrid, search: &mut ClosestHit) {
     for step in walker {
         search.visit_cell();
-        let i = grid.geom.cell_index(step.cell);
-        let done =
-            if grid.is_occupied(i) { search.test_cell(grid.cell(i), step.t_exit) } else { search.done_at(step.t_exit) };
-        if done {
+        if search.test_cell(grid.cell(grid.geom.cell_index(step.cell)), step.t_exit) {
             return;
         }
     }
