@@ -153,6 +153,10 @@ pub struct GridArgs {
     /// Cost model Tinter (default 0.5, or the calibration's).
     #[arg(long)]
     pub t_inter: Option<f64>,
+    /// Memory weight of the auto resolution: cell steps' worth of time per byte of grid per
+    /// triangle (default 1.5; 0 is the survey's model and interval).
+    #[arg(long, value_parser = parse_memory_weight)]
+    pub memory_weight: Option<f64>,
     /// Number of resolutions sampled by guess-and-check.
     #[arg(long, default_value_t = CostModel::default().samples)]
     pub samples: u32,
@@ -445,6 +449,13 @@ pub struct BenchTraceArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+fn parse_memory_weight(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(w) if w.is_finite() && w >= 0.0 => Ok(w),
+        _ => Err(format!("expected a finite number ≥ 0, got \"{s}\"")),
+    }
 }
 
 fn parse_camera(s: &str) -> Result<gridrt_scene::Camera, String> {

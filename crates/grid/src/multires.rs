@@ -179,7 +179,7 @@ impl Ctx<'_> {
         if cost_based {
             let cells = geom.cell_count();
             let m = self.opts.cost;
-            if m.cost(cells, refs.len() as u64) >= n as f64 * m.t_inter {
+            if m.cost(cells, refs.len() as u64, n) >= n as f64 * m.t_inter {
                 return Ok(None);
             }
         }

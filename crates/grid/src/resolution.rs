@@ -20,6 +20,12 @@
 //!   minimising T(m) = Tsetup + m·Tstep + (N_m/m²)·Tinter is taken. The sampled curve is
 //!   returned for plotting. The interval's top is capped by a memory budget
 //!   ([`CostModel::max_cells`]).
+//! - memory-aware guess-and-check ([`CostModel::memory_aware`], the command line's and the
+//!   app's auto): T(m) + Tstep·w·(bytes of the grid per triangle), sampled from M = N up. The
+//!   survey's model ignores what a cell costs in memory; on the CPU the fastest flat grid has
+//!   5–8 cells per triangle while T(m) picks ~20 (a ½…2× sweep around it, 2026-12-02). w = 1.5
+//!   cell steps per byte per triangle is the value that puts every swept optimum of the shared
+//!   scenes within T's reach on this machine (the README has the sweep).
 
 use glam::Vec3;
 use gridrt_scene::Aabb;
@@ -41,6 +47,10 @@ pub struct CostModel {
     /// … and at most this many cells overall. Also the hard limit for every structure, whatever
     /// chose its resolution (over all levels of a hierarchy): `--max-cells`.
     pub max_cells: u64,
+    /// Memory weight w: cell steps' worth of time per byte of grid per triangle (0: the
+    /// survey's model and interval).
+    #[serde(default)]
+    pub memory_weight: f64,
 }
 
 impl Default for CostModel {
@@ -53,15 +63,27 @@ impl Default for CostModel {
             samples: 24,
             max_cells_per_triangle: 64.0,
             max_cells: 1 << 26,
+            memory_weight: 0.0,
         }
     }
 }
 
 impl CostModel {
-    /// T(m) for a grid with `cells` cells and `n_m` triangle–cell references.
-    pub fn cost(&self, cells: u64, n_m: u64) -> f64 {
+    /// The survey's constants with the memory term (see the module doc).
+    pub fn memory_aware() -> CostModel {
+        CostModel { memory_weight: 1.5, ..CostModel::default() }
+    }
+
+    /// T(m) for a grid with `cells` cells and `n_m` triangle–cell references over `triangles`
+    /// triangles, plus the memory term (the flat grid's bytes: an offset and an occupancy bit
+    /// per cell, an index per reference).
+    pub fn cost(&self, cells: u64, n_m: u64, triangles: usize) -> f64 {
         let m = (cells as f64).cbrt();
-        self.t_setup + m * self.t_step + (n_m as f64 / (m * m)) * self.t_inter
+        let bytes = 4.125 * cells as f64 + 4.0 * n_m as f64;
+        self.t_setup
+            + m * self.t_step
+            + (n_m as f64 / (m * m)) * self.t_inter
+            + self.t_step * self.memory_weight * bytes / triangles.max(1) as f64
     }
 
     /// The memory cap on cells for `n` triangles.
@@ -354,7 +376,9 @@ pub fn sample_curve(
 ) -> Vec<CostSample> {
     let n = tris.len().max(1) as f64;
     let r = model.t_inter / model.t_step;
-    let m_lo = (2.0 * r * n).cbrt().max(1.0);
+    // The survey's interval starts at the point model's optimum; with the memory term it starts
+    // at one cell per triangle.
+    let m_lo = if model.memory_weight > 0.0 { n.cbrt() } else { (2.0 * r * n).cbrt() }.max(1.0);
     let m_hi = (r * n).sqrt().min((model.cell_cap(tris.len()) as f64).cbrt()).max(m_lo);
     let k = model.samples.max(2);
     let mut resolutions: Vec<[u32; 3]> = Vec::new();
@@ -387,7 +411,14 @@ pub fn samples_at(
         .map(|(&res, n_m)| {
             let cells = res.iter().map(|&x| x as u64).product::<u64>();
             let mg = (cells as f64).cbrt();
-            CostSample { m: mg, resolution: res, cells, n_m, mu: n_m as f64 / (mg * mg), cost: model.cost(cells, n_m) }
+            CostSample {
+                m: mg,
+                resolution: res,
+                cells,
+                n_m,
+                mu: n_m as f64 / (mg * mg),
+                cost: model.cost(cells, n_m, tris.len()),
+            }
         })
         .collect()
 }

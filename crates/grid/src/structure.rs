@@ -89,7 +89,7 @@ impl Default for GridConfig {
             kind: GridKind::Flat,
             resolution: None,
             build: BuildOptions { insert: Default::default(), parallel: true },
-            cost: CostModel::default(),
+            cost: CostModel::memory_aware(),
             macro_size: None,
             multires: MultiresOptions::default(),
             twolevel: TwoLevelOptions::default(),

@@ -60,13 +60,14 @@ pub fn path() -> Option<PathBuf> {
 /// The cost model the command line's auto resolution uses: the saved calibration's CPU
 /// constants when there is one, else the survey's; and a note saying which.
 pub fn active_cost_model() -> (CostModel, String) {
-    let mut m = CostModel::default();
+    let mut m = CostModel::memory_aware();
+    let w = m.memory_weight;
     match load() {
         Some((path, c)) => {
             c.apply_to(&mut m);
-            (m, format!("calibrated constants from {}", path.display()))
+            (m, format!("calibrated constants from {} and memory weight {w}", path.display()))
         }
-        None => (m, "the survey's constants (Tsetup 1.0, Tstep 0.1, Tinter 0.5)".into()),
+        None => (m, format!("the survey's constants (Tsetup 1.0, Tstep 0.1, Tinter 0.5) and memory weight {w}")),
     }
 }
 

@@ -16,7 +16,7 @@ use crate::cli::{Cli, GridArgs};
 #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
 impl GridArgs {
     pub fn cost_model(&self) -> anyhow::Result<CostModel> {
-        let d = CostModel::default();
+        let d = CostModel::memory_aware();
         // Only the native build reads a saved calibration into `m`.
         #[cfg_attr(target_arch = "wasm32", allow(unused_mut))]
         let mut m = CostModel {
@@ -25,6 +25,7 @@ impl GridArgs {
             t_inter: self.t_inter.unwrap_or(d.t_inter),
             samples: self.samples,
             max_cells: self.max_cells,
+            memory_weight: self.memory_weight.unwrap_or(d.memory_weight),
             ..d
         };
         #[cfg(not(target_arch = "wasm32"))]

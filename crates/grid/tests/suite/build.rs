@@ -150,7 +150,7 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
             )
             .unwrap();
             assert_eq!(grid.refs.len() as u64, s.n_m);
-            assert!((s.cost - model.cost(s.cells, s.n_m)).abs() < 1e-9);
+            assert!((s.cost - model.cost(s.cells, s.n_m, tris.len())).abs() < 1e-9);
         }
         // The interval is the survey's: from (10N)^⅓ up.
         let lo = (10.0 * tris.len() as f64).cbrt();
@@ -163,6 +163,19 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     let (cheap, dear) = (with_step(0.02), with_step(1.0));
     let m = |c: &gridrt_grid::ResolutionChoice| c.resolution.iter().map(|&x| x as f64).product::<f64>();
     assert!(m(&cheap) > m(&dear), "{:?} vs {:?}", cheap.resolution, dear.resolution);
+    // The memory term: sampled from one cell per triangle up, each sample's cost is T(m) plus
+    // the grid's bytes per triangle weighted, and the choice is coarser than the survey's.
+    let aware = CostModel::memory_aware();
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &aware, InsertMode::BoundingBox, true);
+    let lo = (tris.len() as f64).cbrt();
+    assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
+    for s in &choice.curve {
+        let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
+        let expected = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 1.5 * bytes / tris.len() as f64;
+        assert!((s.cost - expected).abs() < 1e-9, "{s:?}");
+    }
+    let survey = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
+    assert!(m(&choice) < m(&survey), "{:?} vs {:?}", choice.resolution, survey.resolution);
 }
 
 /// Above `EXACT_COUNT_LIMIT` triangles guess-and-check estimates N_m from a sample (large
