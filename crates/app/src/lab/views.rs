@@ -131,3 +131,46 @@ pub fn interior_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Ca
     let candidates = [0.1f32, 0.2, 0.3, 0.4, 0.5].into_iter().flat_map(|f| [0.15f32, 0.3].map(|h| camera(f, h)));
     candidates.max_by(|a, b| depth(a).total_cmp(&depth(b))).expect("candidates")
 }
+
+#[cfg(test)]
+mod tests {
+    use gridrt_scene::procedural::{SceneKind, generate};
+
+    use super::*;
+
+    fn share(tris: &[[Vec3; 3]], probe: &AnyGrid, cam: &Camera) -> f64 {
+        let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+        hit_share(&probe.trace_batch(tris, &image_rays(cam, 64, 48), opts, true).0)
+    }
+
+    /// The framed camera fills its image with the model (the bounds-framing camera does not),
+    /// and the interior view of a closed building sees walls in every direction.
+    #[test]
+    fn framed_and_interior_views_see_the_model() {
+        for kind in [SceneKind::Sphereflake, SceneKind::Mountain] {
+            let tris = generate(kind, 2, 1).mesh.triangles();
+            let bounds = gridrt_grid::triangle_bounds_with(&tris, false);
+            let probe = probe_grid(&tris).unwrap();
+            let fit = share(&tris, &probe, &Camera::fit(&bounds, 4.0 / 3.0));
+            let framed = share(&tris, &probe, &framed_camera(&tris, &bounds, &probe, 4.0 / 3.0));
+            assert!(framed >= 0.7 && framed > fit, "{kind:?}: framed {framed}, fit {fit}");
+        }
+        // A closed box of 12 triangles: from inside, every ray hits.
+        let (lo, hi) = (Vec3::new(-4.0, 0.0, -1.0), Vec3::new(4.0, 2.0, 1.0));
+        let c = |i: u32| {
+            Vec3::new(
+                [lo.x, hi.x][(i & 1) as usize],
+                [lo.y, hi.y][(i >> 1 & 1) as usize],
+                [lo.z, hi.z][(i >> 2) as usize],
+            )
+        };
+        let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+        let tris: Vec<[Vec3; 3]> =
+            quads.iter().flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]]).collect();
+        let bounds = gridrt_grid::triangle_bounds_with(&tris, false);
+        let probe = probe_grid(&tris).unwrap();
+        let cam = interior_camera(&tris, &bounds, &probe);
+        assert!(share(&tris, &probe, &cam) == 1.0, "{cam:?}");
+        assert!((cam.target - cam.eye).x > 0.0, "looks along the longer axis: {cam:?}");
+    }
+}
