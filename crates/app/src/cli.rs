@@ -158,7 +158,7 @@ pub struct GridArgs {
     #[arg(long, value_parser = parse_memory_weight)]
     pub memory_weight: Option<f64>,
     /// Number of resolutions sampled by guess-and-check.
-    #[arg(long, default_value_t = CostModel::default().samples)]
+    #[arg(long, default_value_t = CostModel::memory_aware().samples)]
     pub samples: u32,
     /// macrocell: fine cells per macrocell edge, a power of two (default: chosen by the cost model).
     #[arg(long)]

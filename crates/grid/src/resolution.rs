@@ -70,8 +70,11 @@ impl Default for CostModel {
 
 impl CostModel {
     /// The survey's constants with the memory term (see the module doc).
+    /// Its interval, from M = N to the memory cap (64 cells per triangle), is narrower than the
+    /// survey's in m, so 12 samples space m as finely as 24 do there (each sample is a counting
+    /// pass, the largest part of a mid-size build).
     pub fn memory_aware() -> CostModel {
-        CostModel { memory_weight: 1.5, ..CostModel::default() }
+        CostModel { memory_weight: 1.5, samples: 12, ..CostModel::default() }
     }
 
     /// T(m) for a grid with `cells` cells and `n_m` triangle–cell references over `triangles`
