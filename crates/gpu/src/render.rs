@@ -17,7 +17,7 @@ use gridrt_scene::{Aabb, Camera, Hit};
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
 use crate::layout::{FrameTotals, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams};
-use crate::trace::{TraceJob, Tracer, WORKGROUP, pipeline, range, read_back, walker_for};
+use crate::trace::{TraceJob, Tracer, WORKGROUP, pipeline, read_back, records, walker_for};
 use crate::upload::{GpuScene, GpuStructure};
 use crate::view::View;
 
@@ -323,7 +323,7 @@ impl Renderer {
             pass.dispatch_workgroups(groups, 1, 1);
         };
         // The tile's records of each per-pixel buffer.
-        let r = |buf, stride| range(buf, 0, count, stride);
+        let r = |buf, stride| records(buf, count, stride);
         let (rays, hits, stats) = (r(&t.rays, RAY_BYTES), r(&t.hits, HIT_BYTES), r(&t.stats, STATS_BYTES));
         let (pixels, shade) = (r(&t.pixels, PIXEL_BYTES), b(&t.shade));
         let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), rays.clone(), shade.clone()]);

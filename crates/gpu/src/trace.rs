@@ -142,9 +142,9 @@ impl Tracer {
         let pipe = self.pipeline(ctx, Kernel::for_kind(s.kind), b.walker)?;
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: range(b.rays, 0, b.count, RAY_BYTES) },
-            wgpu::BindGroupEntry { binding: 2, resource: range(b.hits, 0, b.count, HIT_BYTES) },
-            wgpu::BindGroupEntry { binding: 3, resource: range(b.stats, 0, b.count, STATS_BYTES) },
+            wgpu::BindGroupEntry { binding: 1, resource: records(b.rays, b.count, RAY_BYTES) },
+            wgpu::BindGroupEntry { binding: 2, resource: records(b.hits, b.count, HIT_BYTES) },
+            wgpu::BindGroupEntry { binding: 3, resource: records(b.stats, b.count, STATS_BYTES) },
             wgpu::BindGroupEntry { binding: 4, resource: scene.triangles.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 5, resource: s.refs.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 6, resource: s.cells.as_entire_binding() },
@@ -238,17 +238,18 @@ impl Tracer {
     }
 }
 
-/// Records `[first, first + count)` of a buffer of `stride`-byte records, as a binding.
-pub fn range(buffer: &wgpu::Buffer, first: u32, count: u32, stride: u64) -> wgpu::BindingResource<'_> {
+/// The first `count` records of a buffer of `stride`-byte records, as a binding.
+pub fn records(buffer: &wgpu::Buffer, count: u32, stride: u64) -> wgpu::BindingResource<'_> {
     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
         buffer,
-        offset: first as u64 * stride,
+        offset: 0,
         size: std::num::NonZeroU64::new(count.max(1) as u64 * stride),
     })
 }
 
-/// Ray ranges bound at an offset (tiles) must start at a multiple of this many rays: the
-/// storage-binding offset alignment for the smallest record (4-byte pixels), at least 64.
+/// The granularity of tile sizes, in pixels: the storage-binding offset alignment for the
+/// smallest record (4-byte pixels), at least 64. Tiles are bound from the start of the
+/// per-pixel buffers, so this only keeps tiles whole multiples of the workgroup.
 pub fn tile_quantum(ctx: &GpuContext) -> u32 {
     (ctx.device.limits().min_storage_buffer_offset_alignment / 4).max(64)
 }

@@ -58,7 +58,7 @@ impl Camera {
     }
 
     /// Orthonormal basis (right, up, forward) with a fallback up vector when looking along it.
-    fn basis(&self) -> (Vec3, Vec3, Vec3) {
+    pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
         let fwd = (self.target - self.eye).normalize();
         let up = if fwd.cross(self.up).length_squared() < 1e-12 { Vec3::Z } else { self.up };
         let right = fwd.cross(up).normalize();

@@ -6,6 +6,7 @@ use gridrt_scene::Camera;
 use gridrt_scene::rays::{camera_rays, inside_rays, random_rays, write_rays};
 
 use crate::cli::{RayKind, RaysArgs};
+use crate::lab::views;
 
 pub fn run(args: RaysArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
@@ -14,15 +15,15 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
     let rays = match args.kind {
         RayKind::Random => random_rays(&bounds, args.count, args.seed),
         RayKind::Camera => camera_rays(&Camera::fit(&bounds, 4.0 / 3.0), args.count),
-        RayKind::Framed => {
+        RayKind::Framed | RayKind::Interior => {
             let tris = mesh.triangles();
-            let probe = crate::lab::views::probe_grid(&tris)?;
-            camera_rays(&crate::lab::views::framed_camera(&tris, &bounds, &probe, 4.0 / 3.0), args.count)
-        }
-        RayKind::Interior => {
-            let tris = mesh.triangles();
-            let probe = crate::lab::views::probe_grid(&tris)?;
-            camera_rays(&crate::lab::views::interior_camera(&tris, &bounds, &probe), args.count)
+            let probe = views::probe_grid(&tris)?;
+            let cam = if args.kind == RayKind::Framed {
+                views::framed_camera(&tris, &bounds, &probe, 4.0 / 3.0)
+            } else {
+                views::interior_camera(&tris, &bounds, &probe)
+            };
+            camera_rays(&cam, args.count)
         }
         RayKind::Inside => {
             let origin = match &args.origin {

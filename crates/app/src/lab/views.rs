@@ -60,16 +60,23 @@ pub fn hit_share(hits: &[Hit]) -> f64 {
     hits.iter().filter(|h| h.is_hit()).count() as f64 / hits.len().max(1) as f64
 }
 
-/// A camera for images of `aspect` (width / height) that the model fills: from [`Camera::fit`]'s eye, turned towards the centre of the
-/// hit pixels of a small probe image and narrowed to their extent (or zoomed in when they
-/// already span the image), until [`FRAMED_HIT_SHARE`] of the probe rays hit. An empty probe
-/// keeps the camera it has.
+/// A `w`×`h` probe image of `cam` traced through `probe`: its rays and their hits.
+fn probe_image(tris: &[[Vec3; 3]], probe: &AnyGrid, cam: &Camera, w: u32, h: u32) -> (Vec<Ray>, Vec<Hit>) {
+    let rays = image_rays(cam, w, h);
+    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let (hits, _) = probe.trace_batch(tris, &rays, opts, true);
+    (rays, hits)
+}
+
+/// A camera for images of `aspect` (width / height) that the model fills: from
+/// [`Camera::fit`]'s eye, turned towards the centre of the hit pixels of a small probe image and
+/// narrowed to their extent (or zoomed in when they already span the image), until
+/// [`FRAMED_HIT_SHARE`] of the probe rays hit. An empty probe keeps the camera it has.
 pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect: f32) -> Camera {
     let (w, h) = (96u32, ((96.0 / aspect).round() as u32).clamp(8, 960));
-    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
     let mut cam = Camera::fit(bounds, aspect);
     for _ in 0..16 {
-        let (hits, _) = probe.trace_batch(tris, &image_rays(&cam, w, h), opts, true);
+        let (_, hits) = probe_image(tris, probe, &cam, w, h);
         // The hit pixels' box in image coordinates, [-1, 1] on both axes, y up.
         let (mut lo, mut hi) = (glam::Vec2::splat(1.0), glam::Vec2::splat(-1.0));
         for (i, _) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
@@ -81,9 +88,7 @@ pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect:
         if share == 0.0 || share >= FRAMED_HIT_SHARE {
             break;
         }
-        let fwd = (cam.target - cam.eye).normalize();
-        let right = fwd.cross(cam.up).normalize();
-        let up = right.cross(fwd);
+        let (right, up, fwd) = cam.basis();
         let half_v = (cam.vfov_deg.to_radians() * 0.5).tan();
         let half_h = half_v * aspect;
         let centre = (lo + hi) * 0.5;
@@ -109,7 +114,6 @@ pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect:
 pub fn interior_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Camera {
     let (lo, ext, c) = (bounds.min, bounds.max - bounds.min, bounds.center());
     let along_x = ext.x >= ext.z;
-    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
     let camera = |f: f32, h: f32| {
         let y = lo.y + h * ext.y;
         let (eye, target) = if along_x {
@@ -120,16 +124,16 @@ pub fn interior_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid) -> Ca
         Camera { eye, target, up: Vec3::Y, vfov_deg: 60.0 }
     };
     let depth = |cam: &Camera| {
-        let (hits, _) = probe.trace_batch(tris, &image_rays(cam, 32, 24), opts, true);
-        let rays = image_rays(cam, 32, 24);
+        let (rays, hits) = probe_image(tris, probe, cam, 32, 24);
         // A miss counts as no depth: looking out of an open side is not looking along the inside.
         let mut d: Vec<f32> =
             hits.iter().zip(&rays).map(|(h, r)| if h.is_hit() { h.t * r.d().length() } else { 0.0 }).collect();
         d.sort_by(f32::total_cmp);
         d[d.len() / 2]
     };
+    // Each candidate's probe is traced once.
     let candidates = [0.1f32, 0.2, 0.3, 0.4, 0.5].into_iter().flat_map(|f| [0.15f32, 0.3].map(|h| camera(f, h)));
-    candidates.max_by(|a, b| depth(a).total_cmp(&depth(b))).expect("candidates")
+    candidates.map(|cam| (depth(&cam), cam)).max_by(|a, b| a.0.total_cmp(&b.0)).expect("candidates").1
 }
 
 #[cfg(test)]
@@ -139,8 +143,7 @@ mod tests {
     use super::*;
 
     fn share(tris: &[[Vec3; 3]], probe: &AnyGrid, cam: &Camera) -> f64 {
-        let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
-        hit_share(&probe.trace_batch(tris, &image_rays(cam, 64, 48), opts, true).0)
+        hit_share(&probe_image(tris, probe, cam, 64, 48).1)
     }
 
     /// The framed camera fills its image with the model (the bounds-framing camera does not),

@@ -87,21 +87,24 @@ impl PeerKind {
 
     /// Whether the peer uses the grids' triangle test (its hits must then equal the grids').
     pub fn shared_test(self) -> bool {
-        #[cfg(feature = "embree")]
-        if matches!(self, PeerKind::Embree | PeerKind::EmbreePacket8) {
-            return false;
+        match self {
+            PeerKind::ObvhsCwbvhOwnTest => false,
+            #[cfg(feature = "embree")]
+            PeerKind::Embree | PeerKind::EmbreePacket8 => false,
+            _ => true,
         }
-        self != PeerKind::ObvhsCwbvhOwnTest
     }
 
     /// Whether the library's build runs on all threads (`bvh`'s `build_par`; obvhs' `parallel`
-    /// feature is off: on 2 cores its threads only add contention).
+    /// feature is off: on 2 cores its threads only add contention; Embree builds on its own
+    /// threads).
     pub fn parallel_build(self) -> bool {
-        #[cfg(feature = "embree")]
-        if matches!(self, PeerKind::Embree | PeerKind::EmbreePacket8) {
-            return true;
+        match self {
+            PeerKind::Bvh => true,
+            #[cfg(feature = "embree")]
+            PeerKind::Embree | PeerKind::EmbreePacket8 => true,
+            _ => false,
         }
-        self == PeerKind::Bvh
     }
 }
 
@@ -372,11 +375,13 @@ mod embree {
             scene.set_build_quality(BuildQuality::MEDIUM);
             let n = tris.len().max(1);
             let mut geom = device.create_geometry(GeometryKind::TRIANGLE).expect("Embree geometry");
-            let vertices: Vec<[f32; 3]> = tris.iter().flat_map(|t| t.map(|v| v.to_array())).collect();
             let mut vb = geom
                 .set_new_buffer::<[f32; 3]>(BufferUsage::VERTEX, 0, Format::FLOAT3, 12, 3 * n)
                 .expect("Embree vertex buffer");
-            vb[..vertices.len()].copy_from_slice(&vertices);
+            // Straight into Embree's buffer (the build is timed).
+            for (dst, v) in vb.iter_mut().zip(tris.iter().flatten()) {
+                *dst = v.to_array();
+            }
             let mut ib = geom
                 .set_new_buffer::<[u32; 3]>(BufferUsage::INDEX, 0, Format::UINT3, 12, n)
                 .expect("Embree index buffer");
