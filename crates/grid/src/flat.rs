@@ -12,6 +12,7 @@ use crate::BuildError;
 use crate::build::{BuildOptions, PhaseTimes, bucket};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use crate::stats::StructureStats;
+use crate::trace::closest_hit::ClosestHit;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FlatGrid {
@@ -57,6 +58,14 @@ impl FlatGrid {
             return &[];
         }
         &self.refs[self.cell_start[index] as usize..self.cell_start[index + 1] as usize]
+    }
+
+    /// Whether the walk of `search` ends in cell `index`, which it leaves at `t_exit`: the
+    /// cell's triangles are tested (an empty cell only checks the best hit so far).
+    #[inline]
+    pub fn visit(&self, search: &mut ClosestHit, index: usize, t_exit: f32) -> bool {
+        search.visit_cell();
+        search.test_cell(self.cell(index), t_exit)
     }
 
     pub fn memory_bytes(&self) -> u64 {

@@ -37,8 +37,9 @@ use serde::{Deserialize, Serialize};
 use crate::geometry::{GridGeometry, GridRay, INSERT_MARGIN_CELLS};
 use crate::stats::RayStats;
 use crate::stats::{HierarchyStats, StructureStats};
+use crate::trace::closest_hit::ClosestHit;
 use crate::trace::closest_hit::closest_hit;
-use crate::traversal::{Traversal, Walker};
+use crate::traversal::{Traversal, walk};
 
 /// `cells[i][1] == CHILD` marks an internal cell.
 pub const CHILD: u32 = u32::MAX;
@@ -116,40 +117,28 @@ impl Hierarchy {
 
     /// Closest hit (see the module doc).
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
-        struct Frame {
-            node: u32,
-            ray: GridRay,
-            walker: Walker,
-            t_enter: f32,
-        }
         closest_hit(tris, ray, mailbox, |search| {
-            let Some(top) = self.geom.clip(&search.ray) else { return };
-            let mut stack: Vec<Frame> = Vec::with_capacity(MAX_DEPTH);
-            let walker = Walker::new(traversal, &top, self.nodes[0].res);
-            stack.push(Frame { node: 0, ray: top, walker, t_enter: top.t0 });
-            while let Some(f) = stack.last_mut() {
-                let Some(step) = f.walker.next() else {
-                    stack.pop();
-                    continue;
-                };
-                search.visit_cell();
-                let node = &self.nodes[f.node as usize];
-                let idx = node.first_cell as usize
-                    + (step.cell.x + node.res.x * (step.cell.y + node.res.y * step.cell.z)) as usize;
-                let [a, b] = self.cells[idx];
-                let t_enter = f.t_enter;
-                f.t_enter = step.t_exit;
-                if b == CHILD {
-                    let child = &self.nodes[a as usize];
-                    let r = f.ray.child(step.cell, child.res, t_enter, step.t_exit);
-                    let walker = Walker::new(traversal, &r, child.res);
-                    stack.push(Frame { node: a, ray: r, walker, t_enter: r.t0 });
-                    continue;
-                }
-                if search.test_cell(&self.refs[a as usize..(a + b) as usize], step.t_exit) {
-                    return;
-                }
+            if let Some(top) = self.geom.clip(&search.ray) {
+                self.walk_node(0, &top, traversal, search);
             }
+        })
+    }
+
+    /// Walks node `n` along `ray` (clipped to the node), descending into child grids; true when
+    /// the search is done. Recursion depth is the hierarchy's, at most [`MAX_DEPTH`].
+    fn walk_node(&self, n: u32, ray: &GridRay, traversal: Traversal, search: &mut ClosestHit) -> bool {
+        let node = &self.nodes[n as usize];
+        let mut t_enter = ray.t0;
+        walk(traversal, ray, node.res, |cell, addr, t_exit| {
+            search.visit_cell();
+            let [a, b] = self.cells[node.first_cell as usize + addr];
+            let entered = std::mem::replace(&mut t_enter, t_exit);
+            if b == CHILD {
+                let child = &self.nodes[a as usize];
+                let r = ray.child(cell, child.res, entered, t_exit);
+                return self.walk_node(a, &r, traversal, search);
+            }
+            search.test_cell(&self.refs[a as usize..(a + b) as usize], t_exit)
         })
     }
 }

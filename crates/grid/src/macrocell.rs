@@ -27,7 +27,7 @@ use crate::flat::FlatGrid;
 use crate::geometry::{GridGeometry, GridRay};
 use crate::stats::RayStats;
 use crate::trace::closest_hit::closest_hit;
-use crate::traversal::{Traversal, Walker};
+use crate::traversal::{Traversal, walk};
 
 /// Macrocell sizes the cost model chooses among.
 pub const MACRO_SIZES: [u32; 4] = [2, 4, 8, 16];
@@ -104,7 +104,12 @@ impl MacrocellGrid {
 
     #[inline]
     pub fn occupied(&self, m: UVec3) -> bool {
-        let i = (m.x + self.macro_res.x * (m.y + self.macro_res.y * m.z)) as usize;
+        self.occupied_at((m.x + self.macro_res.x * (m.y + self.macro_res.y * m.z)) as usize)
+    }
+
+    /// Whether the macrocell at linear address `i` holds references.
+    #[inline]
+    pub fn occupied_at(&self, i: usize) -> bool {
         self.occupancy[i / 32] & (1 << (i % 32)) != 0
     }
 
@@ -121,24 +126,21 @@ impl MacrocellGrid {
             let macro_ray = GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..fine_ray };
             let block = UVec3::splat(self.a);
             let mut t_enter = fine_ray.t0;
-            for m in Walker::new(traversal, &macro_ray, self.macro_res) {
+            walk(traversal, &macro_ray, self.macro_res, |m, maddr, m_exit| {
                 search.visit_cell();
-                if self.occupied(m.cell) {
-                    let lo = m.cell * self.a;
-                    let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0: t_enter, t1: m.t_exit, ..fine_ray };
-                    for step in Walker::new(traversal, &sub, block) {
-                        search.visit_cell();
-                        let cell = self.fine.cell(self.fine.geom.cell_index(lo + step.cell));
-                        if search.test_cell(cell, step.t_exit) {
-                            return;
-                        }
+                if self.occupied_at(maddr) {
+                    let lo = m * self.a;
+                    let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0: t_enter, t1: m_exit, ..fine_ray };
+                    let fine = &self.fine;
+                    if walk(traversal, &sub, block, |c, _, t_exit| {
+                        fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
+                    }) {
+                        return true;
                     }
                 }
-                if search.done_at(m.t_exit) {
-                    return;
-                }
-                t_enter = m.t_exit;
-            }
+                t_enter = m_exit;
+                search.done_at(m_exit)
+            });
         })
     }
 }

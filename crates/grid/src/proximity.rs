@@ -20,7 +20,7 @@ use crate::flat::FlatGrid;
 use crate::geometry::GridRay;
 use crate::stats::RayStats;
 use crate::trace::closest_hit::closest_hit;
-use crate::traversal::{Traversal, Walker};
+use crate::traversal::{Traversal, walk};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProximityGrid {
@@ -44,27 +44,30 @@ impl ProximityGrid {
         closest_hit(tris, ray, mailbox, |search| {
             let Some(mut gr) = self.grid.geom.clip(&search.ray) else { return };
             let res = self.grid.geom.res;
-            let mut walker = Walker::new(traversal, &gr, res);
-            while let Some(step) = walker.next() {
-                search.visit_cell();
-                let idx = self.grid.geom.cell_index(step.cell);
-                let k = self.distance[idx] as u32;
-                if k >= 2 {
-                    // Leave the empty cube around this cell; restart the walk there.
-                    let lo = step.cell.saturating_sub(UVec3::splat(k - 1));
-                    let hi = (step.cell + UVec3::splat(k)).min(res);
-                    let t = exit_of_box(&gr, lo, hi).min(gr.t1);
-                    if t > gr.t0 && t < gr.t1 {
-                        gr.t0 = t;
-                        walker = Walker::new(traversal, &gr, res);
-                        continue;
+            loop {
+                // Set when the walk leaves an empty cube: it restarts at the cube's exit.
+                let mut restart = None;
+                walk(traversal, &gr, res, |cell, idx, t_exit| {
+                    search.visit_cell();
+                    let k = self.distance[idx] as u32;
+                    if k >= 2 {
+                        // Leave the empty cube around this cell.
+                        let lo = cell.saturating_sub(UVec3::splat(k - 1));
+                        let hi = (cell + UVec3::splat(k)).min(res);
+                        let t = exit_of_box(&gr, lo, hi).min(gr.t1);
+                        if t > gr.t0 && t < gr.t1 {
+                            restart = Some(t);
+                            return true;
+                        }
+                        if t >= gr.t1 {
+                            return true;
+                        }
                     }
-                    if t >= gr.t1 {
-                        return;
-                    }
-                }
-                if search.test_cell(self.grid.cell(idx), step.t_exit) {
-                    return;
+                    search.test_cell(self.grid.cell(idx), t_exit)
+                });
+                match restart {
+                    Some(t) => gr.t0 = t,
+                    None => return,
                 }
             }
         })

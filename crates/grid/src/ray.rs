@@ -18,6 +18,8 @@ pub struct PreparedRay {
     pub sx: f32,
     pub sy: f32,
     pub sz: f32,
+    /// The origin's components in the order kx, ky, kz.
+    pub org_k: [f32; 3],
 }
 
 impl PreparedRay {
@@ -56,6 +58,7 @@ impl PreparedRay {
             sx: dir[kx] * sz,
             sy: dir[ky] * sz,
             sz,
+            org_k: [org[kx], org[ky], org[kz]],
         })
     }
 }

@@ -37,16 +37,20 @@ pub struct TriHit {
 /// Watertight intersection of `r` with triangle `tri`; `None` on a miss.
 #[inline]
 pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
-    let a = tri[0] - r.org;
-    let b = tri[1] - r.org;
-    let c = tri[2] - r.org;
-    let ax = (a[r.kx] - r.sx * a[r.kz]) as f64;
-    let ay = (a[r.ky] - r.sy * a[r.kz]) as f64;
-    let bx = (b[r.kx] - r.sx * b[r.kz]) as f64;
-    let by = (b[r.ky] - r.sy * b[r.kz]) as f64;
-    let cx = (c[r.kx] - r.sx * c[r.kz]) as f64;
-    let cy = (c[r.ky] - r.sy * c[r.kz]) as f64;
-    // Exact products, one rounding: the sign of each edge function is exact.
+    // The corners as nine floats, read at the ray's axis permutation (an index chosen at run
+    // time into a `Vec3` would go through the stack); the same operations as translating the
+    // whole corner and picking its components.
+    let p: &[f32; 9] = bytemuck::cast_ref(tri);
+    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
+    let [ox, oy, oz] = r.org_k;
+    let sheared = |v: usize| {
+        let z = p[3 * v + kz] - oz;
+        ((p[3 * v + kx] - ox) - r.sx * z, (p[3 * v + ky] - oy) - r.sy * z, z)
+    };
+    let (ax, ay, az) = sheared(0);
+    let (bx, by, bz) = sheared(1);
+    let (cx, cy, cz) = sheared(2);
+    let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
@@ -57,9 +61,9 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     if det == 0.0 {
         return None;
     }
-    let az = (r.sz * a[r.kz]) as f64;
-    let bz = (r.sz * b[r.kz]) as f64;
-    let cz = (r.sz * c[r.kz]) as f64;
+    let az = (r.sz * az) as f64;
+    let bz = (r.sz * bz) as f64;
+    let cz = (r.sz * cz) as f64;
     let t = ((u * az + v * bz + w * cz) / det) as f32;
     if !(t >= r.tmin && t <= r.tmax && t < f32::INFINITY) {
         return None;

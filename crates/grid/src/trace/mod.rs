@@ -8,12 +8,8 @@ use gridrt_scene::{Hit, Ray};
 
 use crate::flat::FlatGrid;
 use crate::stats::{BatchStats, RayStats};
-use crate::traversal::amanatides_woo::AmanatidesWoo;
-use crate::traversal::bresenham::Bresenham;
-use crate::traversal::cleary_wyvill::ClearyWyvill;
-use crate::traversal::liu::Liu;
-use crate::traversal::{CellStep, Traversal};
-use closest_hit::{ClosestHit, closest_hit};
+use crate::traversal::{Traversal, walk};
+use closest_hit::closest_hit;
 
 /// Per-trace settings.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -22,30 +18,12 @@ pub struct TraceOptions {
     pub mailbox: bool,
 }
 
-/// Closest hit of `ray` in `grid` over `tris` (the triangles the grid was built from). Each
-/// walker is its own type here (not [`crate::traversal::Walker`]), so the loop is compiled once
-/// per traversal.
+/// Closest hit of `ray` in `grid` over `tris` (the triangles the grid was built from).
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
     closest_hit(tris, ray, opts.mailbox, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
-        let res = grid.geom.res;
-        match opts.traversal {
-            Traversal::AmanatidesWoo => walk_flat(AmanatidesWoo::new(&gr, res), grid, search),
-            Traversal::ClearyWyvill => walk_flat(ClearyWyvill::new(&gr, res), grid, search),
-            Traversal::Liu => walk_flat(Liu::new(&gr, res), grid, search),
-            Traversal::Bresenham => walk_flat(Bresenham::new(&gr, res), grid, search),
-        }
+        walk(opts.traversal, &gr, grid.geom.res, |_, cell, t_exit| grid.visit(search, cell, t_exit));
     })
-}
-
-#[inline]
-fn walk_flat(walker: impl Iterator<Item = CellStep>, grid: &FlatGrid, search: &mut ClosestHit) {
-    for step in walker {
-        search.visit_cell();
-        if search.test_cell(grid.cell(grid.geom.cell_index(step.cell)), step.t_exit) {
-            return;
-        }
-    }
 }
 
 /// Traces a batch (in parallel with the `parallel` feature and `parallel = true`).

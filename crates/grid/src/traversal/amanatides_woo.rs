@@ -40,17 +40,88 @@ impl AmanatidesWoo {
     /// The current cell and its exit; then the next crossing (the cursor is not done).
     #[inline]
     pub(super) fn advance(&mut self) -> Option<CellStep> {
-        let a = argmin3(self.t_max.to_array());
-        let t = self.t_max[a];
+        // A constant axis per arm keeps the walker's state in registers (an index chosen at
+        // run time would send every vector through the stack).
+        match argmin3(self.t_max.to_array()) {
+            0 => self.advance_along::<0>(),
+            1 => self.advance_along::<1>(),
+            _ => self.advance_along::<2>(),
+        }
+    }
+
+    #[inline(always)]
+    fn advance_along<const A: usize>(&mut self) -> Option<CellStep> {
+        let t = self.t_max[A];
         let out = CellStep { cell: self.cur.cell.as_uvec3(), t_exit: t.min(self.t1) };
         if t.is_nan() || t > self.t1 {
             // The segment ends inside this cell.
             self.cur.done = true;
         } else {
-            self.cur.cross(a);
-            self.wall[a] += self.cur.step[a] as f32;
-            self.t_max[a] = (self.wall[a] - self.o[a]) * self.inv_d[a];
+            self.cur.cross(A);
+            self.wall[A] += self.cur.step[A] as f32;
+            self.t_max[A] = (self.wall[A] - self.o[A]) * self.inv_d[A];
         }
         Some(out)
+    }
+
+    /// The same walk as the iterator, fused into one loop: `visit(cell, address, t_exit)`
+    /// (address `x + res.x · (y + res.y · z)`, kept incrementally) returns true to stop, and
+    /// then so does this. Every piece of state is a local, one per axis, so the loop runs in
+    /// registers; the cells, their order and their exits are the iterator's.
+    #[inline]
+    pub fn walk_linear(self, mut visit: impl FnMut(UVec3, usize, f32) -> bool) -> bool {
+        let Cursor { cell, res, step, done } = self.cur;
+        if done {
+            return false;
+        }
+        let (o, inv, t1) = (self.o, self.inv_d, self.t1);
+        let stride = [step.x as isize, (step.y * res.x) as isize, (step.z * res.x * res.y) as isize];
+        let mut addr = (cell.x + res.x * (cell.y + res.y * cell.z)) as isize;
+        let (mut cx, mut cy, mut cz) = (cell.x, cell.y, cell.z);
+        let (mut wx, mut wy, mut wz) = (self.wall.x, self.wall.y, self.wall.z);
+        let (mut tx, mut ty, mut tz) = (self.t_max.x, self.t_max.y, self.t_max.z);
+        loop {
+            // argmin3's tie rule: x before y before z.
+            let (a, t) = if tx <= ty && tx <= tz {
+                (0, tx)
+            } else if ty <= tz {
+                (1, ty)
+            } else {
+                (2, tz)
+            };
+            if visit(UVec3::new(cx as u32, cy as u32, cz as u32), addr as usize, t.min(t1)) {
+                return true;
+            }
+            if t.is_nan() || t > t1 {
+                return false;
+            }
+            addr += stride[a];
+            match a {
+                0 => {
+                    cx += step.x;
+                    if cx < 0 || cx >= res.x {
+                        return false;
+                    }
+                    wx += step.x as f32;
+                    tx = (wx - o.x) * inv.x;
+                }
+                1 => {
+                    cy += step.y;
+                    if cy < 0 || cy >= res.y {
+                        return false;
+                    }
+                    wy += step.y as f32;
+                    ty = (wy - o.y) * inv.y;
+                }
+                _ => {
+                    cz += step.z;
+                    if cz < 0 || cz >= res.z {
+                        return false;
+                    }
+                    wz += step.z as f32;
+                    tz = (wz - o.z) * inv.z;
+                }
+            }
+        }
     }
 }

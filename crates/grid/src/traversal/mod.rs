@@ -111,8 +111,29 @@ impl Iterator for Walker {
     }
 }
 
-/// Index of the smallest of three values; ties go to the lowest axis (same rule everywhere,
-/// GPU included, so cell sequences are reproducible).
+/// Walks the cells `ray` crosses in a grid of `res`, in order, with the traversal `kind`:
+/// `visit(cell, address, t_exit)` (address `x + res.x · (y + res.y · z)`) returns true to stop,
+/// and then so does `walk`. Every structure's loop goes through here with its cell test
+/// injected; Amanatides–Woo (the default) runs as one fused loop, the others through their
+/// iterators, each compiled into the caller.
+#[inline]
+pub fn walk(kind: Traversal, ray: &GridRay, res: UVec3, mut visit: impl FnMut(UVec3, usize, f32) -> bool) -> bool {
+    #[inline]
+    fn each(
+        steps: impl Iterator<Item = CellStep>,
+        res: UVec3,
+        visit: &mut impl FnMut(UVec3, usize, f32) -> bool,
+    ) -> bool {
+        steps.into_iter().any(|s| visit(s.cell, (s.cell.x + res.x * (s.cell.y + res.y * s.cell.z)) as usize, s.t_exit))
+    }
+    match kind {
+        Traversal::AmanatidesWoo => amanatides_woo::AmanatidesWoo::new(ray, res).walk_linear(visit),
+        Traversal::ClearyWyvill => each(cleary_wyvill::ClearyWyvill::new(ray, res), res, &mut visit),
+        Traversal::Liu => each(liu::Liu::new(ray, res), res, &mut visit),
+        Traversal::Bresenham => each(bresenham::Bresenham::new(ray, res), res, &mut visit),
+    }
+}
+
 /// What the exact walkers share: the cell they are in, the grid's resolution, the step
 /// direction per axis and whether the walk has ended. WGSL: `Cursor` in
 /// shaders/shared/walker_common.wgsl.

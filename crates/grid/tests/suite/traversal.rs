@@ -221,3 +221,45 @@ fn bresenham_misses_cells_on_a_diagonal() {
     }
     assert_eq!(n_b, 8);
 }
+
+/// `walk` (every structure's loop; Amanatides–Woo fused into one loop over linear addresses)
+/// visits each walker's cells with their addresses and exits, bit for bit, and stops where it
+/// is told to.
+#[test]
+fn walk_matches_the_walkers_iterators() {
+    use gridrt_grid::traversal::walk;
+    let mut rng = Rng::new(11);
+    let mut compared = 0;
+    for g in 0..40 {
+        let res = [1 + rng.below(20) as u32, 1 + rng.below(20) as u32, 1 + rng.below(20) as u32];
+        let lo = Vec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), rng.range(-5.0, 5.0));
+        let hi = lo + Vec3::new(rng.range(0.5, 8.0), rng.range(0.5, 8.0), rng.range(0.5, 8.0));
+        let geom = GridGeometry::new(&Aabb { min: lo, max: hi }, res);
+        for (i, ray) in adversarial_rays(&geom, &mut rng, 300).iter().enumerate() {
+            let Some(pr) = PreparedRay::new(ray) else { continue };
+            let Some(gr) = geom.clip(&pr) else { continue };
+            for kind in Traversal::ALL {
+                let want: Vec<(UVec3, usize, u32)> = Walker::new(kind, &gr, geom.res)
+                    .map(|s| (s.cell, geom.cell_index(s.cell), s.t_exit.to_bits()))
+                    .collect();
+                let mut got = Vec::new();
+                let stopped = walk(kind, &gr, geom.res, |c, a, t| {
+                    got.push((c, a, t.to_bits()));
+                    false
+                });
+                assert!(!stopped);
+                assert_eq!(got, want, "{kind} grid {g} {res:?} ray {i}: {ray:?}");
+                let stop = i % want.len().max(1);
+                let mut seen = 0;
+                let stopped = walk(kind, &gr, geom.res, |_, _, _| {
+                    seen += 1;
+                    seen > stop
+                });
+                assert_eq!(seen, (stop + 1).min(want.len()), "{kind} grid {g} ray {i}: early stop");
+                assert_eq!(stopped, stop < want.len(), "{kind} grid {g} ray {i}: stop reported");
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 20_000, "too few walks compared: {compared}");
+}
