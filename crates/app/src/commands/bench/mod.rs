@@ -56,6 +56,9 @@ pub struct Row {
     pub mismatches: u64,
     /// Of those, the rays where brute force disagrees with the flat grid (the grid is wrong).
     pub flat_wrong: u64,
+    /// Of those, the rays whose true hit lies closer than the peer's documented blind distance
+    /// (obvhs' CWBVH clamps every box entry to t ≥ 1e-4, so it cannot see such hits).
+    pub blind_near: u64,
 }
 
 /// A structure under test: a grid kind or (with the `peers` feature) a peer configuration.
@@ -88,6 +91,14 @@ impl Subject {
             Subject::Grid(_) => true,
             #[cfg(feature = "peers")]
             Subject::Peer(p) => p.shared_test(),
+        }
+    }
+    /// The distance before which the structure cannot see hits, when it has one.
+    pub fn blind_distance(self) -> Option<f32> {
+        match self {
+            Subject::Grid(_) => None,
+            #[cfg(feature = "peers")]
+            Subject::Peer(p) => p.blind_distance(),
         }
     }
     pub fn name(self) -> String {
@@ -225,7 +236,7 @@ fn bench_scene(
         for (i, (set, rays)) in sets.iter().enumerate() {
             // Every disagreement is settled by brute force (the watertight test on every
             // triangle): it says whether the flat grid or this structure is wrong.
-            let (mut mismatches, mut flat_wrong) = (0u64, 0u64);
+            let (mut mismatches, mut flat_wrong, mut blind_near) = (0u64, 0u64, 0u64);
             for (k, (a, b)) in reference[i].iter().zip(&hits[i]).enumerate() {
                 if agree(a, b) {
                     continue;
@@ -233,6 +244,7 @@ fn bench_scene(
                 mismatches += 1;
                 let (truth, _) = gridrt_grid::brute::trace(&sc.tris, &rays[k]);
                 flat_wrong += u64::from(!agree(&truth, a));
+                blind_near += u64::from(subject.blind_distance().is_some_and(|d| truth.t < d && !(b.t < d)));
                 if mismatches <= 3 {
                     let (name, ray) = (subject.name(), rays[k]);
                     log::warn!(
@@ -258,6 +270,7 @@ fn bench_scene(
                 shared_triangle_test: subject.shared_test(),
                 mismatches,
                 flat_wrong,
+                blind_near,
             });
         }
         pb.inc(1);
