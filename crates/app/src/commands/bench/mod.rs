@@ -244,7 +244,7 @@ fn bench_scene(
                 mismatches += 1;
                 let (truth, _) = gridrt_grid::brute::trace(&sc.tris, &rays[k]);
                 flat_wrong += u64::from(!agree(&truth, a));
-                blind_near += u64::from(subject.blind_distance().is_some_and(|d| truth.t < d && !(b.t < d)));
+                blind_near += u64::from(subject.blind_distance().is_some_and(|d| truth.t < d && b.t >= d));
                 if mismatches <= 3 {
                     let (name, ray) = (subject.name(), rays[k]);
                     log::warn!(
