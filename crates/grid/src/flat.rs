@@ -101,9 +101,9 @@ impl FlatGrid {
         #[cfg(feature = "parallel")]
         if opts.parallel {
             let (cell_start, refs) = crate::build::parallel::bucket(tris, &geom, opts.insert, times)?;
-            return Ok(FlatGrid::new(geom, cell_start, refs));
+            return Ok(times.record("occupancy", || FlatGrid::new(geom, cell_start, refs)));
         }
         let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;
-        Ok(FlatGrid::new(geom, cell_start, refs))
+        Ok(times.record("occupancy", || FlatGrid::new(geom, cell_start, refs)))
     }
 }

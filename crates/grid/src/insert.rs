@@ -74,21 +74,43 @@ pub fn for_each_cell_in_layers(
     layers: std::ops::Range<u32>,
     mut f: impl FnMut(usize),
 ) -> u32 {
+    if mode == InsertMode::BoundingBox {
+        return for_each_box_cell_in_layers(geom, [g.lo, g.hi], layers, f);
+    }
     let single = g.lo == g.hi;
     let mut n = 0;
     for z in g.lo.z.max(layers.start)..=g.hi.z.min(layers.end.saturating_sub(1)) {
         for y in g.lo.y..=g.hi.y {
             for x in g.lo.x..=g.hi.x {
                 let c = UVec3::new(x, y, z);
-                if mode == InsertMode::Exact
-                    && !single
-                    && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + g.margin)
-                {
+                if !single && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + g.margin) {
                     continue;
                 }
                 f(geom.cell_index(c));
                 n += 1;
             }
+        }
+    }
+    n
+}
+
+/// Bounding-box insertion of the cell range `[lo, hi]` (a [`prepare`]d triangle's), in the
+/// z layers `layers`: `f(cell_index)` in increasing order; returns how many.
+#[inline]
+pub fn for_each_box_cell_in_layers(
+    geom: &GridGeometry,
+    [lo, hi]: [UVec3; 2],
+    layers: std::ops::Range<u32>,
+    mut f: impl FnMut(usize),
+) -> u32 {
+    let mut n = 0;
+    for z in lo.z.max(layers.start)..=hi.z.min(layers.end.saturating_sub(1)) {
+        for y in lo.y..=hi.y {
+            let row = geom.cell_index(UVec3::new(lo.x, y, z));
+            for c in row..=row + (hi.x - lo.x) as usize {
+                f(c);
+            }
+            n += hi.x - lo.x + 1;
         }
     }
     n

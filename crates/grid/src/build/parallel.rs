@@ -3,13 +3,13 @@
 //! touch, in increasing order, and each slab counts and scatters its own cells without atomics.
 //! The output is therefore bit-identical to the serial [`super::bucket::bucket`], with no sort.
 
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
-use super::{PhaseTimes, check_refs, zeroed};
+use super::{PhaseTimes, check_refs, zeroed_par};
 use crate::BuildError;
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
-use crate::insert::{InsertMode, for_each_cell_in_layers, prepare};
+use crate::insert::{InsertMode, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
 
 /// In-place inclusive prefix sum of `counts` in two parallel passes (chunk sums, then each
 /// chunk's running sum from its offset); returns the total.
@@ -45,6 +45,28 @@ fn split_lengths<T>(mut v: &mut [T], lengths: impl Iterator<Item = usize>) -> Ve
     out
 }
 
+/// The cells triangle `tri` (prepared cell range `cells`) goes into within `layers`: the range
+/// itself for bounding-box insertion, else the exact test.
+#[inline(always)]
+fn cells_of_triangle(
+    geom: &GridGeometry,
+    tri: &[Vec3; 3],
+    cells: [UVec3; 2],
+    mode: InsertMode,
+    layers: std::ops::Range<u32>,
+    f: impl FnMut(usize),
+) {
+    match mode {
+        InsertMode::BoundingBox => {
+            for_each_box_cell_in_layers(geom, cells, layers, f);
+        }
+        InsertMode::Exact => {
+            let g = prepare(geom, tri, INSERT_MARGIN_CELLS);
+            for_each_cell_in_layers(geom, &g, mode, layers, f);
+        }
+    }
+}
+
 /// [`super::bucket::bucket`] over all of `tris` on all threads, with the same output.
 pub fn bucket(
     tris: &[[Vec3; 3]],
@@ -59,49 +81,58 @@ pub fn bucket(
     // Several slabs per thread so that work stealing evens out dense and sparse slabs.
     let slabs = (rayon::current_num_threads() * 2).clamp(1, nz as usize);
     let edge: Vec<u32> = (0..=slabs).map(|s| (s as u64 * nz as u64 / slabs as u64) as u32).collect();
-    // Each triangle's z layers; a slab visits the triangles whose layers meet it, in
-    // increasing order.
-    let (span, box_refs): (Vec<[u32; 2]>, Vec<u64>) = times.record("bin", || {
-        tris.par_iter()
+    // Each triangle's cell range, prepared once (count and scatter read it); a slab visits the
+    // triangles whose z layers meet it, in increasing order. The ranges' cells bound the
+    // references from above (exactly, for box insertion): a grid far over the limit is refused
+    // before its cells are visited one by one (a fine grid over long slivers would otherwise
+    // take minutes to fail).
+    let (boxes, upper): (Vec<[UVec3; 2]>, u64) = times.record("bin", || {
+        let boxes: Vec<[UVec3; 2]> = tris
+            .par_iter()
             .map(|t| {
                 let g = prepare(&geom, t, INSERT_MARGIN_CELLS);
-                let e = g.hi - g.lo + glam::UVec3::ONE;
-                ([g.lo.z, g.hi.z], e.x as u64 * e.y as u64 * e.z as u64)
+                [g.lo, g.hi]
             })
-            .unzip()
+            .collect();
+        let upper = boxes
+            .par_iter()
+            .map(|[lo, hi]| {
+                let e = *hi - *lo + UVec3::ONE;
+                e.x as u64 * e.y as u64 * e.z as u64
+            })
+            .sum();
+        (boxes, upper)
     });
-    // The bounding boxes' cells bound the references from above (exactly, for box
-    // insertion): a grid far over the limit is refused before its cells are visited one by
-    // one (a fine grid over long slivers would otherwise take minutes to fail).
-    let upper: u64 = box_refs.par_iter().sum();
-    drop(box_refs);
     if mode == InsertMode::BoundingBox {
         check_refs(upper)?;
     }
     let in_slab = |s: usize| {
         let (z0, z1) = (edge[s], edge[s + 1]);
-        span.iter().enumerate().filter(move |(_, z)| z[0] < z1 && z[1] >= z0).map(|(i, _)| i as u32)
+        boxes.iter().enumerate().filter(move |(_, b)| b[0].z < z1 && b[1].z >= z0).map(|(i, _)| i as u32)
     };
     let slab_cells = |s: usize| (edge[s + 1] - edge[s]) as usize * layer;
     // `offsets` becomes `cell_start` in place (Lagae & Dutré): counts, then their inclusive
     // prefix sum (each cell's end), then the scatter decrements each cell's end once per
     // reference, filling the cell backwards, so each entry ends at its cell's start. No
     // cursor array, no second M-sized allocation.
-    let mut offsets = zeroed::<u32>(cells + 1, "the cell table")?;
+    // Both zero-filled on all threads (see `zeroed_par`); the time is the phase's that needs it.
+    let mut offsets = times.record("count", || zeroed_par::<u32>(cells + 1, "the cell table"))?;
     times.record("count", || {
         split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells)).into_par_iter().enumerate().for_each(
             |(s, part)| {
                 let base = edge[s] as usize * layer;
                 for i in in_slab(s) {
-                    let g = prepare(&geom, &tris[i as usize], INSERT_MARGIN_CELLS);
-                    for_each_cell_in_layers(&geom, &g, mode, edge[s]..edge[s + 1], |c| part[c - base] += 1);
+                    let layers = edge[s]..edge[s + 1];
+                    cells_of_triangle(&geom, &tris[i as usize], boxes[i as usize], mode, layers, |c| {
+                        part[c - base] += 1
+                    });
                 }
             },
         )
     });
     let total = times.record("scan", || par_inclusive_scan(&mut offsets[..cells]))?;
     offsets[cells] = total as u32;
-    let mut refs = zeroed::<u32>(total as usize, "triangle references")?;
+    let mut refs = times.record("scatter", || zeroed_par::<u32>(total as usize, "triangle references"))?;
     times.record("scatter", || {
         // A slab's references start where the cell before it ends.
         let slab_start = |s: usize| {
@@ -117,8 +148,8 @@ pub fn bucket(
             let ref_base = ref_bounds[s] as u32;
             // Backwards, so that each cell, filled from its end, holds increasing indices.
             for i in in_slab(s).rev() {
-                let g = prepare(&geom, &tris[i as usize], INSERT_MARGIN_CELLS);
-                for_each_cell_in_layers(&geom, &g, mode, edge[s]..edge[s + 1], |c| {
+                let layers = edge[s]..edge[s + 1];
+                cells_of_triangle(&geom, &tris[i as usize], boxes[i as usize], mode, layers, |c| {
                     let e = &mut end[c - base];
                     *e -= 1;
                     out[(*e - ref_base) as usize] = i;
