@@ -266,15 +266,16 @@ impl BoxCounter {
         }
     }
 
-    /// Cells the bounding box `[lo, hi]` covers (the same arithmetic as [`prepare`]: the
-    /// per-axis map to grid space is monotonic, so transforming the box's corners gives exactly
-    /// the min and max of the transformed vertices).
+    /// Cells the bounding box `[lo, hi]` covers, given relative to the grid's corner (`min` is
+    /// the same at every resolution, so callers subtract it once). The same arithmetic as
+    /// [`prepare`]: the per-axis map to grid space is monotonic, so transforming the box's
+    /// corners gives exactly the min and max of the transformed vertices.
     #[inline]
     fn cells(&self, lo: glam::DVec3, hi: glam::DVec3) -> u64 {
         // Clamping to [0, res − 1] first and truncating equals flooring then clamping, without
         // a libm call per component (x86-64's baseline has no SSE4.1 round).
-        let l = ((lo - self.min) * self.inv - INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
-        let h = ((hi - self.min) * self.inv + INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
+        let l = (lo * self.inv - INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
+        let h = (hi * self.inv + INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
         let e = h - l + glam::UVec3::ONE;
         e.x as u64 * e.y as u64 * e.z as u64
     }
@@ -304,6 +305,7 @@ pub fn count_refs_curve(
     if k == 0 {
         return (Vec::new(), tris.len());
     }
+    let min = geoms[0].min;
     let stride = tris.len().div_ceil(EXACT_COUNT_LIMIT).max(1);
     // Per chunk: [exact counts of large and sampled small triangles ×k, small total, small
     // sampled, large count at the first resolution].
@@ -312,8 +314,8 @@ pub fn count_refs_curve(
         let mut small = vec![0u64; k];
         let (mut n_small, mut n_sampled) = (0u64, 0u64);
         for (j, t) in part.iter().enumerate() {
-            let lo = t[0].min(t[1]).min(t[2]).as_dvec3();
-            let hi = t[0].max(t[1]).max(t[2]).as_dvec3();
+            let lo = t[0].min(t[1]).min(t[2]).as_dvec3() - min;
+            let hi = t[0].max(t[1]).max(t[2]).as_dvec3() - min;
             let c0 = geoms[0].cells(lo, hi);
             if stride > 1 && geoms[0].is_small(lo, hi) {
                 n_small += 1;
