@@ -18,6 +18,8 @@
 //!   and a shared edge still gets exactly opposite signs in its two triangles (watertight).
 //!   `det`, `t`, `u`, `v` follow in f64 and are rounded to f32 once. (WGSL has no f64; the GPU
 //!   port gets the same signs from Kahan's FMA difference of products.)
+//!   An f32 pre-filter ([`certainly_outside`]) rejects first the misses whose signs the f32
+//!   edge functions already decide within a proven error bound, so it changes no result.
 //! - an edge function of exactly zero counts as inside, so a ray through an edge or vertex hits
 //!   every triangle around it (the deterministic tie-break then picks the smallest index).
 //! - no back-face culling; `t` must be finite and inside `[tmin, tmax]` (closed interval).
@@ -50,6 +52,11 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     let (ax, ay, az) = sheared(0);
     let (bx, by, bz) = sheared(1);
     let (cx, cy, cz) = sheared(2);
+    // Most triangles a ray is tested against are misses the f32 edge functions already
+    // decide; the exact f64 signs are needed only for the rest.
+    if certainly_outside([ax, ay], [bx, by], [cx, cy]) {
+        return None;
+    }
     let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
@@ -69,6 +76,31 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
         return None;
     }
     Some(TriHit { t, u: (v / det) as f32, v: (w / det) as f32 })
+}
+
+/// Whether the sheared 2-D corners `a`, `b`, `c` certainly leave the origin outside: the edge
+/// functions in f32, each with a bound on its rounding error, show two of them with certain,
+/// opposite signs. Never true when the exact test would find the origin inside (the f64 signs
+/// of [`intersect`] are the exact signs), so skipping the exact test then changes no result.
+///
+/// Error bound: with unit roundoff ε = 2⁻²⁴, p = fl(x·y) and q = fl(z·w) are each within
+/// ε·|p|(1 + ε) of the exact products, and fl(p − q) within ε·|p − q| of p − q, so the f32 edge
+/// function is within 2ε(1 + ε)(|p| + |q|) of the exact one, plus 2⁻¹⁴⁹ per product when
+/// they are subnormal. The bound used, fl(|p| + |q|)·2⁻²² + 2⁻¹²⁶, is larger than both. An
+/// overflow makes the bound infinite or a value NaN, and every comparison with them false.
+#[inline]
+pub fn certainly_outside(a: [f32; 2], b: [f32; 2], c: [f32; 2]) -> bool {
+    const FOUR_EPS: f32 = 1.0 / (1u32 << 22) as f32;
+    let edge = |x: f32, y: f32, z: f32, w: f32| {
+        let (p, q) = (x * y, z * w);
+        (p - q, (p.abs() + q.abs()) * FOUR_EPS + f32::MIN_POSITIVE)
+    };
+    let (u, eu) = edge(c[0], b[1], c[1], b[0]);
+    let (v, ev) = edge(a[0], c[1], a[1], c[0]);
+    let (w, ew) = edge(b[0], a[1], b[1], a[0]);
+    let negative = (u < -eu) | (v < -ev) | (w < -ew);
+    let positive = (u > eu) | (v > ev) | (w > ew);
+    negative & positive
 }
 
 /// Deterministic order of candidate hits: smaller `t`, then smaller triangle index.

@@ -72,3 +72,54 @@ fn every_hit_lies_on_its_triangle() {
     }
     assert!(hits > 50_000, "{hits}");
 }
+
+/// The f32 pre-filter of the edge functions only ever rejects what the exact signs reject:
+/// random corners of every magnitude (subnormal to near overflow), nearly collinear corners,
+/// corners on a line through the origin and exact zeros; and it does reject most misses.
+#[test]
+fn f32_edge_filter_never_rejects_an_exact_inside() {
+    use gridrt_grid::triangle::certainly_outside;
+    let mut rng = Rng::new(5);
+    let exact_outside = |a: [f32; 2], b: [f32; 2], c: [f32; 2]| {
+        let e = |x: f32, y: f32, z: f32, w: f32| x as f64 * y as f64 - z as f64 * w as f64;
+        let (u, v, w) = (e(c[0], b[1], c[1], b[0]), e(a[0], c[1], a[1], c[0]), e(b[0], a[1], b[1], a[0]));
+        (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)
+    };
+    let (mut rejected, mut outside, mut cases) = (0u64, 0u64, 0u64);
+    for i in 0..400_000 {
+        let scale = 2f32.powi(rng.below(280) as i32 - 150);
+        let mut p = || [rng.range(-1.0, 1.0) * scale, rng.range(-1.0, 1.0) * scale];
+        let (mut a, mut b, mut c) = (p(), p(), p());
+        match i % 5 {
+            // Nearly collinear: c a hair off the line a–b.
+            1 => {
+                let s = rng.f32();
+                c = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]) * (1.0 + 1e-7)];
+            }
+            // On a line through the origin: an edge function is (nearly) zero.
+            2 => b = [a[0] * -0.5, a[1] * -0.5],
+            // Exact zeros and shared coordinates.
+            3 => {
+                a[0] = 0.0;
+                c[1] = b[1];
+            }
+            // Huge and tiny corners together.
+            4 => c = [c[0] * 1e30, c[1] * 1e-30],
+            _ => {}
+        }
+        let ex = exact_outside(a, b, c);
+        let f = certainly_outside(a, b, c);
+        assert!(!f || ex, "filter rejected an inside: {a:?} {b:?} {c:?}");
+        // Its use: plain corners at scales where products neither overflow nor underflow.
+        if i % 5 == 0 && scale.abs().log2().abs() < 60.0 {
+            rejected += f as u64;
+            outside += ex as u64;
+            cases += 1;
+        }
+    }
+    println!("f32 filter: {rejected} of {outside} exact misses rejected ({cases} plain cases)");
+    assert!(
+        rejected as f64 > 0.99 * outside as f64,
+        "the filter should decide nearly every miss: {rejected} of {outside}"
+    );
+}
