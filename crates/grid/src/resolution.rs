@@ -247,7 +247,7 @@ pub fn best_sample(curve: &[CostSample]) -> Option<&CostSample> {
 
 /// Above this many triangles, guess-and-check estimates N_m for bounding-box insertion from a
 /// sample instead of counting every triangle at every sampled m (see [`count_refs_curve`]).
-pub const EXACT_COUNT_LIMIT: usize = 1 << 15;
+pub const EXACT_COUNT_LIMIT: usize = 1 << 14;
 
 /// A grid's constants for counting the cells of a triangle's bounding box.
 #[derive(Clone, Copy, Debug)]
@@ -287,10 +287,18 @@ impl BoxCounter {
     }
 }
 
+/// Whether triangle `i` is in the 1-in-`stride` sample: a multiplicative hash of the index, so
+/// that meshes whose triangle order is periodic (a height field's rows) are not sampled in step
+/// with their period, as a systematic every-k-th sample would be.
+#[inline]
+fn sampled(i: usize, stride: usize) -> bool {
+    ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32).is_multiple_of(stride as u64)
+}
+
 /// N_m at each of `resolutions` (increasing) for bounding-box insertion, in one pass over the
 /// triangles. Up to [`EXACT_COUNT_LIMIT`] triangles every count is exact. Above it, a triangle
 /// narrower than a cell at the coarsest resolution ("small") is counted at the finer ones only
-/// if it falls in a systematic 1-in-k sample, and the sample's mean stands in for the rest;
+/// if it falls in a hashed 1-in-k sample, and the sample's mean stands in for the rest;
 /// every other ("large") triangle is always counted exactly, so the few big triangles that
 /// dominate N_m in architectural scenes never depend on the sample. The coarsest resolution's
 /// count is always exact. Returns the counts and how many triangles were counted at every m.
@@ -320,7 +328,7 @@ pub fn count_refs_curve(
             if stride > 1 && geoms[0].is_small(lo, hi) {
                 n_small += 1;
                 small[0] += c0;
-                if (base + j).is_multiple_of(stride) {
+                if sampled(base + j, stride) {
                     n_sampled += 1;
                     for (s, g) in small.iter_mut().zip(&geoms).skip(1) {
                         *s += g.cells(lo, hi);
