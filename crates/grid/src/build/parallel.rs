@@ -67,6 +67,16 @@ fn cells_of_triangle(
     }
 }
 
+/// One chunk of triangles sorted by slab: slab `s` owns `items[start[s]..start[s + 1]]`, each a
+/// triangle index and its cell range, in increasing index order.
+struct SlabBins {
+    items: Vec<(u32, [UVec3; 2])>,
+    start: Vec<u32>,
+}
+
+/// Most cells in one slab: 128k cells, 512 KiB of the cell table.
+const SLAB_CELLS: usize = 1 << 17;
+
 /// [`super::bucket::bucket`] over all of `tris` on all threads, with the same output.
 pub fn bucket(
     tris: &[[Vec3; 3]],
@@ -78,9 +88,16 @@ pub fn bucket(
     let cells = geom.cell_count() as usize;
     let layer = geom.res.x as usize * geom.res.y as usize;
     let nz = geom.res.z;
-    // Several slabs per thread so that work stealing evens out dense and sparse slabs.
-    let slabs = (rayon::current_num_threads() * 2).clamp(1, nz as usize);
+    // Several slabs per thread so that work stealing evens out dense and sparse slabs, and
+    // slabs small enough that a slab's part of the cell table stays in cache while its
+    // triangles, in any order, count and scatter into it (particles in random order made the
+    // build super-linear in N).
+    let slabs = (rayon::current_num_threads() * 2).max(cells.div_ceil(SLAB_CELLS)).clamp(1, nz as usize);
     let edge: Vec<u32> = (0..=slabs).map(|s| (s as u64 * nz as u64 / slabs as u64) as u32).collect();
+    let mut slab_of_layer = vec![0u32; nz as usize];
+    for s in 0..slabs {
+        slab_of_layer[edge[s] as usize..edge[s + 1] as usize].fill(s as u32);
+    }
     // Each triangle's cell range, prepared once (count and scatter read it); a slab visits the
     // triangles whose z layers meet it, in increasing order. The ranges' cells bound the
     // references from above (exactly, for box insertion): a grid far over the limit is refused
@@ -106,10 +123,41 @@ pub fn bucket(
     if mode == InsertMode::BoundingBox {
         check_refs(upper)?;
     }
-    let in_slab = |s: usize| {
-        let (z0, z1) = (edge[s], edge[s + 1]);
-        boxes.iter().enumerate().filter(move |(_, b)| b[0].z < z1 && b[1].z >= z0).map(|(i, _)| i as u32)
-    };
+    // The triangles of each slab with their cell ranges (copied, so that a slab reads them in
+    // sequence), in increasing order: each chunk of triangles sorts its own by slab (a counting
+    // sort), and a slab reads its run of every chunk, chunks in order.
+    let bins: Vec<SlabBins> = times.record("bin", || {
+        const CHUNK: usize = 1 << 14;
+        let slab_range =
+            |b: &[UVec3; 2]| slab_of_layer[b[0].z as usize] as usize..=slab_of_layer[b[1].z as usize] as usize;
+        boxes
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(k, part)| {
+                let mut start = vec![0u32; slabs + 1];
+                for b in part {
+                    for s in slab_range(b) {
+                        start[s + 1] += 1;
+                    }
+                }
+                for s in 0..slabs {
+                    start[s + 1] += start[s];
+                }
+                let mut next = start.clone();
+                let mut items = vec![(0u32, [UVec3::ZERO; 2]); start[slabs] as usize];
+                for (j, b) in part.iter().enumerate() {
+                    for s in slab_range(b) {
+                        items[next[s] as usize] = ((k * CHUNK + j) as u32, *b);
+                        next[s] += 1;
+                    }
+                }
+                SlabBins { items, start }
+            })
+            .collect()
+    });
+    drop(boxes);
+    let in_slab =
+        |s: usize| bins.iter().flat_map(move |b| b.items[b.start[s] as usize..b.start[s + 1] as usize].iter().copied());
     let slab_cells = |s: usize| (edge[s + 1] - edge[s]) as usize * layer;
     // `offsets` becomes `cell_start` in place (Lagae & Dutré): counts, then their inclusive
     // prefix sum (each cell's end), then the scatter decrements each cell's end once per
@@ -121,11 +169,9 @@ pub fn bucket(
         split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells)).into_par_iter().enumerate().for_each(
             |(s, part)| {
                 let base = edge[s] as usize * layer;
-                for i in in_slab(s) {
+                for (i, b) in in_slab(s) {
                     let layers = edge[s]..edge[s + 1];
-                    cells_of_triangle(&geom, &tris[i as usize], boxes[i as usize], mode, layers, |c| {
-                        part[c - base] += 1
-                    });
+                    cells_of_triangle(&geom, &tris[i as usize], b, mode, layers, |c| part[c - base] += 1);
                 }
             },
         )
@@ -147,9 +193,9 @@ pub fn bucket(
             let base = edge[s] as usize * layer;
             let ref_base = ref_bounds[s] as u32;
             // Backwards, so that each cell, filled from its end, holds increasing indices.
-            for i in in_slab(s).rev() {
+            for (i, b) in in_slab(s).rev() {
                 let layers = edge[s]..edge[s + 1];
-                cells_of_triangle(&geom, &tris[i as usize], boxes[i as usize], mode, layers, |c| {
+                cells_of_triangle(&geom, &tris[i as usize], b, mode, layers, |c| {
                     let e = &mut end[c - base];
                     *e -= 1;
                     out[(*e - ref_base) as usize] = i;

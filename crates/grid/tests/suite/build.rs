@@ -70,14 +70,22 @@ fn tri_box_overlap_matches_known_cases() {
 #[test]
 fn parallel_build_is_bit_identical_to_serial() {
     for kind in [SceneKind::Particles, SceneKind::Slivers, SceneKind::Mountain] {
-        let tris = tris_of(kind, if kind == SceneKind::Mountain { 6 } else { 20_000 });
-        for insert in InsertMode::ALL {
-            let geom = GridGeometry::new(&triangle_bounds(&tris), [37, 23, 41]);
-            let a = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: false }, &mut PhaseTimes::default())
+        let tris = tris_of(kind, if kind == SceneKind::Mountain { 7 } else { 40_000 });
+        // A few slabs, and (1.9M cells) many slabs of at most 128k cells each, with the
+        // triangles in several chunks.
+        for (insert, res) in [
+            (InsertMode::BoundingBox, [37, 23, 41]),
+            (InsertMode::Exact, [37, 23, 41]),
+            (InsertMode::BoundingBox, [160, 120, 100]),
+        ] {
+            // Exact insertion is slow: half the triangles (still two chunks).
+            let tris = if insert == InsertMode::Exact { &tris[..tris.len() / 2] } else { &tris[..] };
+            let geom = GridGeometry::new(&triangle_bounds(tris), res);
+            let a = FlatGrid::build(tris, geom, BuildOptions { insert, parallel: false }, &mut PhaseTimes::default())
                 .unwrap();
-            let b = FlatGrid::build(&tris, geom, BuildOptions { insert, parallel: true }, &mut PhaseTimes::default())
+            let b = FlatGrid::build(tris, geom, BuildOptions { insert, parallel: true }, &mut PhaseTimes::default())
                 .unwrap();
-            assert!(a == b, "{kind:?} {insert:?}");
+            assert!(a == b, "{kind:?} {insert:?} {res:?}");
         }
     }
 }
