@@ -70,7 +70,7 @@ fn tri_box_overlap_matches_known_cases() {
 #[test]
 fn parallel_build_is_bit_identical_to_serial() {
     for kind in [SceneKind::Particles, SceneKind::Slivers, SceneKind::Mountain] {
-        let tris = tris_of(kind, if kind == SceneKind::Mountain { 7 } else { 40_000 });
+        let tris = tris_of(kind, if kind == SceneKind::Mountain { 6 } else { 40_000 });
         // A few slabs, and (1.9M cells) many slabs of at most 128k cells each, with the
         // triangles in several chunks.
         for (insert, res) in [
