@@ -9,11 +9,13 @@ struct Node {
     res_first: vec4<u32>,
 }
 
-// [start, count] of a leaf, or [child node, CHILD]. Mirrors Hierarchy::cells.
-@group(0) @binding(6) var<storage, read> cells: array<vec2<u32>>;
+// Per cell (and one more at the end): where its entries start in `refs`, CHILD_BIT set for a
+// child grid, whose one entry is the child node's index; a leaf's entries end where the next
+// cell's start. Mirrors Hierarchy::cells.
+@group(0) @binding(6) var<storage, read> cells: array<u32>;
 @group(0) @binding(7) var<storage, read> nodes: array<Node>;
 
-const CHILD: u32 = 0xffffffffu;
+const CHILD_BIT: u32 = 0x80000000u;
 // Levels, top included (crates/grid/src/hierarchy.rs MAX_DEPTH, keep in sync): the builders
 // stop at depth MAX_DEPTH - 1, so at most MAX_DEPTH - 1 parents are saved.
 const MAX_DEPTH: u32 = 8u;
@@ -90,14 +92,16 @@ fn walk(top: GridRay) {
         visit_cell();
         let c = w.out_cell;
         let t_exit = w.out_t_exit;
-        let cell = cells[node.res_first.w + cell_index(c, node.res_first.xyz)];
+        let i = node.res_first.w + cell_index(c, node.res_first.xyz);
+        let entry = cells[i];
+        let start = entry & ~CHILD_BIT;
         let te = t_enter;
         t_enter = t_exit;
-        if cell.y == CHILD {
+        if (entry & CHILD_BIT) != 0u {
             if depth + 1u < MAX_DEPTH {
                 stack_store(&stack, depth, Frame(w, node, t_enter));
                 depth += 1u;
-                node = nodes[cell.x];
+                node = nodes[refs[start]];
                 let child_res = node.res_first.xyz;
                 let r = child_ray(w.g, c, child_res, te, t_exit);
                 w = walker_init(r, child_res);
@@ -105,7 +109,7 @@ fn walk(top: GridRay) {
             }
             continue;
         }
-        if test_cell(cell.x, cell.x + cell.y, t_exit) {
+        if test_cell(start, cells[i + 1u] & ~CHILD_BIT, t_exit) {
             return;
         }
     }

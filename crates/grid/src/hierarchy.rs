@@ -5,16 +5,18 @@
 //! - `nodes`: one [`Node`] per grid: its resolution, the index of its first cell in `cells`,
 //!   its depth. Node 0 is the top grid; its box is the structure's box. A child node fills
 //!   exactly one cell of its parent, so its box is implied by the path and never stored.
-//! - `cells`: two u32 per cell, `[a, b]`: a leaf holds `refs[a .. a + b]`; an internal cell
-//!   has `b == CHILD` and `a` = the child node's index.
-//! - `refs`: triangle indices, increasing within each leaf.
+//! - `cells`: one u32 per cell, plus one at the end: where the cell's entries start in `refs`,
+//!   with [`CHILD_BIT`] set for an internal cell. All cells, of all nodes, own consecutive
+//!   ranges of `refs` in cell order, so a leaf's range ends where the next entry's starts (the
+//!   compact layout of the flat grid, Lagae & Dutré, over the whole tree); an internal cell
+//!   owns one entry, its child node's index.
+//! - `refs`: triangle indices, increasing within each leaf, and the child indices.
 //!
 //! Why a flat node array and not the survey's hash table of internal voxels: every cell needs
-//! its (start, count) slot anyway when it is a leaf, so storing the child index in that same
-//! slot costs no memory at all, and it is found in O(1) without probing. A hash table keyed by
-//! (node, cell) would add ≥ 8 bytes per internal voxel (key + value, more with a load factor
-//! below 1) on top of the cell array, and probe sequences on the GPU. Measured memory per
-//! structure is printed by `gridrt build --json`.
+//! its slot anyway when it is a leaf, so the child index costs one entry of `refs` per
+//! internal cell, found in O(1) without probing. A hash table keyed by (node, cell) would add
+//! ≥ 8 bytes per internal voxel (key + value, more with a load factor below 1), and probe
+//! sequences on the GPU. Measured memory per structure is printed by `gridrt build --json`.
 //!
 //! # Traversal
 //! A stack of walkers, one per level: each cell of the current grid is either a leaf (test its
@@ -41,8 +43,11 @@ use crate::trace::closest_hit::ClosestHit;
 use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, walk};
 
-/// `cells[i][1] == CHILD` marks an internal cell.
+/// The builders' cell pairs: `[node, CHILD]` marks an internal cell, `[start, count]` a leaf
+/// (see [`Hierarchy::from_pairs`]).
 pub const CHILD: u32 = u32::MAX;
+/// Set in a cell's entry of [`Hierarchy::cells`] when the cell is a child grid.
+pub const CHILD_BIT: u32 = 1 << 31;
 /// Deepest level any hierarchy may have (the traversal stack is this deep).
 pub const MAX_DEPTH: usize = 8;
 /// Largest insertion margin, in cells, a child grid may need before subdividing is refused.
@@ -67,8 +72,17 @@ pub struct Hierarchy {
     /// The top grid's box and resolution.
     pub geom: GridGeometry,
     pub nodes: Vec<Node>,
-    pub cells: Vec<[u32; 2]>,
+    pub cells: Vec<u32>,
     pub refs: Vec<u32>,
+}
+
+/// What one cell of a hierarchy holds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Cell {
+    /// Triangles `refs[range]`.
+    Leaf(std::ops::Range<usize>),
+    /// A child grid: the node's index.
+    Child(u32),
 }
 
 /// The margin (in cells) a node with accumulated `scale` needs: f32 coordinates of the top grid
@@ -80,8 +94,49 @@ pub fn child_margin(top_res: UVec3, scale: Vec3) -> f64 {
 }
 
 impl Hierarchy {
+    /// The hierarchy of the builders' `pairs` (per cell, `[start, count]` of a leaf in `refs` or
+    /// `[node, CHILD]`), laid out compactly: leaf ranges and child indices copied into one
+    /// array in cell order.
+    pub fn from_pairs(
+        geom: GridGeometry,
+        nodes: Vec<Node>,
+        pairs: &[[u32; 2]],
+        refs: &[u32],
+    ) -> Result<Hierarchy, crate::BuildError> {
+        let entries: u64 = pairs.iter().map(|&[_, b]| if b == CHILD { 1 } else { b as u64 }).sum();
+        if entries >= CHILD_BIT as u64 {
+            return Err(crate::BuildError::TooManyReferences { refs: entries, limit: CHILD_BIT as u64 - 1 });
+        }
+        let mut cells = crate::build::zeroed::<u32>(pairs.len() + 1, "hierarchy cells")?;
+        let mut out = Vec::new();
+        out.try_reserve_exact(entries as usize)
+            .map_err(|_| crate::BuildError::OutOfMemory { what: "hierarchy references", bytes: entries * 4 })?;
+        for (cell, &[a, b]) in cells.iter_mut().zip(pairs) {
+            if b == CHILD {
+                *cell = out.len() as u32 | CHILD_BIT;
+                out.push(a);
+            } else {
+                *cell = out.len() as u32;
+                out.extend_from_slice(&refs[a as usize..(a + b) as usize]);
+            }
+        }
+        cells[pairs.len()] = out.len() as u32;
+        Ok(Hierarchy { geom, nodes, cells, refs: out })
+    }
+
+    /// What cell `i` (an index into `cells`, node offset included) holds.
+    #[inline]
+    pub fn cell(&self, i: usize) -> Cell {
+        let start = (self.cells[i] & !CHILD_BIT) as usize;
+        if self.cells[i] & CHILD_BIT != 0 {
+            Cell::Child(self.refs[start])
+        } else {
+            Cell::Leaf(start..(self.cells[i + 1] & !CHILD_BIT) as usize)
+        }
+    }
+
     pub fn memory_bytes(&self) -> u64 {
-        (self.nodes.len() * std::mem::size_of::<Node>() + self.cells.len() * 8 + self.refs.len() * 4) as u64
+        (self.nodes.len() * std::mem::size_of::<Node>() + self.cells.len() * 4 + self.refs.len() * 4) as u64
     }
 
     /// Size figures: nodes per depth in `depth_histogram`, empty leaves in `empty_cells`.
@@ -102,11 +157,11 @@ impl Hierarchy {
             }
             s.depth_histogram[d] += 1;
             let count = (n.res.x * n.res.y * n.res.z) as usize;
-            for c in &self.cells[n.first_cell as usize..n.first_cell as usize + count] {
-                if c[1] != CHILD {
+            for i in n.first_cell as usize..n.first_cell as usize + count {
+                if let Cell::Leaf(r) = self.cell(i) {
                     h.leaves += 1;
-                    s.empty_cells += (c[1] == 0) as u64;
-                    h.refs_per_depth[d] += c[1] as u64;
+                    s.empty_cells += r.is_empty() as u64;
+                    h.refs_per_depth[d] += r.len() as u64;
                 }
             }
         }
@@ -131,14 +186,15 @@ impl Hierarchy {
         let mut t_enter = ray.t0;
         walk(traversal, ray, node.res, |cell, addr, t_exit| {
             search.visit_cell();
-            let [a, b] = self.cells[node.first_cell as usize + addr];
             let entered = std::mem::replace(&mut t_enter, t_exit);
-            if b == CHILD {
-                let child = &self.nodes[a as usize];
-                let r = ray.child(cell, child.res, entered, t_exit);
-                return self.walk_node(a, &r, traversal, search);
+            match self.cell(node.first_cell as usize + addr) {
+                Cell::Child(a) => {
+                    let child = &self.nodes[a as usize];
+                    let r = ray.child(cell, child.res, entered, t_exit);
+                    self.walk_node(a, &r, traversal, search)
+                }
+                Cell::Leaf(r) => search.test_cell(&self.refs[r], t_exit),
             }
-            search.test_cell(&self.refs[a as usize..(a + b) as usize], t_exit)
         })
     }
 }

@@ -270,7 +270,7 @@ pub fn build(
                 }
             }
         }
-        Hierarchy { geom, nodes: root.nodes, cells: root.cells, refs: root.refs }
-    });
+        Hierarchy::from_pairs(geom, root.nodes, &root.cells, &root.refs)
+    })?;
     Ok(h)
 }

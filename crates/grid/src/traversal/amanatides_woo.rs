@@ -96,31 +96,22 @@ impl AmanatidesWoo {
                 return false;
             }
             addr += stride[a];
+            // One cell along the axis: leave when the walk leaves the grid, else the axis'
+            // next wall crossing.
+            macro_rules! cross {
+                ($c:ident, $w:ident, $t:ident, $axis:ident) => {{
+                    $c += step.$axis;
+                    if $c < 0 || $c >= res.$axis {
+                        return false;
+                    }
+                    $w += step.$axis as f32;
+                    $t = ($w - o.$axis) * inv.$axis;
+                }};
+            }
             match a {
-                0 => {
-                    cx += step.x;
-                    if cx < 0 || cx >= res.x {
-                        return false;
-                    }
-                    wx += step.x as f32;
-                    tx = (wx - o.x) * inv.x;
-                }
-                1 => {
-                    cy += step.y;
-                    if cy < 0 || cy >= res.y {
-                        return false;
-                    }
-                    wy += step.y as f32;
-                    ty = (wy - o.y) * inv.y;
-                }
-                _ => {
-                    cz += step.z;
-                    if cz < 0 || cz >= res.z {
-                        return false;
-                    }
-                    wz += step.z as f32;
-                    tz = (wz - o.z) * inv.z;
-                }
+                0 => cross!(cx, wx, tx, x),
+                1 => cross!(cy, wy, ty, y),
+                _ => cross!(cz, wz, tz, z),
             }
         }
     }

@@ -106,21 +106,15 @@ pub fn evaluate(rows: &[Row], auto: &[AutoPoint], scale: &[ScalePoint]) -> Vec<T
         // reported.
         if r.shared_triangle_test {
             let unexplained = r.mismatches - r.blind_near;
-            push(
-                &format!("{}: rays disagreeing with flat", r.structure),
-                &r.scene,
-                unexplained as f64,
-                "= 0",
-                unexplained == 0,
-            );
-            if r.blind_near > 0 {
-                push(
-                    &format!("{}: true hits closer than its blind distance (missed)", r.structure),
-                    &r.scene,
-                    r.blind_near as f64,
-                    "(reported)",
-                    true,
-                );
+            // (target, count, judged): the blind-spot count is reported, not judged.
+            let lines = [
+                Some((format!("{}: rays disagreeing with flat", r.structure), unexplained, true)),
+                (r.blind_near > 0).then(|| {
+                    (format!("{}: true hits closer than its blind distance (missed)", r.structure), r.blind_near, false)
+                }),
+            ];
+            for (target, n, judged) in lines.into_iter().flatten() {
+                push(&target, &r.scene, n as f64, if judged { "= 0" } else { "(reported)" }, !judged || n == 0);
             }
         }
         // Brute force settles each disagreement: the flat grid must never be the wrong one.
