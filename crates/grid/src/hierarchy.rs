@@ -187,15 +187,36 @@ impl Hierarchy {
         walk(traversal, ray, node.res, |cell, addr, t_exit| {
             search.visit_cell();
             let entered = std::mem::replace(&mut t_enter, t_exit);
+            // Empty leaves (most cells) are checked in the walk's loop; tests and descents are
+            // calls, which keeps that loop small enough to be compiled into the walk.
             match self.cell(node.first_cell as usize + addr) {
-                Cell::Child(a) => {
-                    let child = &self.nodes[a as usize];
-                    let r = ray.child(cell, child.res, entered, t_exit);
-                    self.walk_node(a, &r, traversal, search)
-                }
-                Cell::Leaf(r) => search.test_cell(&self.refs[r], t_exit),
+                Cell::Child(a) => self.descend(a, ray, cell, entered, t_exit, traversal, search),
+                Cell::Leaf(r) if r.is_empty() => search.done_at(t_exit),
+                Cell::Leaf(r) => self.test_leaf(search, r, t_exit),
             }
         })
+    }
+
+    /// Walks child node `a`, which fills `cell` of the grid `ray` walks, over `[entered, t_exit]`.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn descend(
+        &self,
+        a: u32,
+        ray: &GridRay,
+        cell: UVec3,
+        entered: f32,
+        t_exit: f32,
+        traversal: Traversal,
+        search: &mut ClosestHit,
+    ) -> bool {
+        let r = ray.child(cell, self.nodes[a as usize].res, entered, t_exit);
+        self.walk_node(a, &r, traversal, search)
+    }
+
+    #[inline(never)]
+    fn test_leaf(&self, search: &mut ClosestHit, r: std::ops::Range<usize>, t_exit: f32) -> bool {
+        search.test_cell(&self.refs[r], t_exit)
     }
 }
 

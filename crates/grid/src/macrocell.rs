@@ -26,7 +26,7 @@ use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
 use crate::geometry::{GridGeometry, GridRay};
 use crate::stats::RayStats;
-use crate::trace::closest_hit::closest_hit;
+use crate::trace::closest_hit::{ClosestHit, closest_hit};
 use crate::traversal::{Traversal, walk};
 
 /// Macrocell sizes the cost model chooses among.
@@ -124,23 +124,37 @@ impl MacrocellGrid {
             let a = self.a as f32;
             // Exact: A is a power of two.
             let macro_ray = GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..fine_ray };
-            let block = UVec3::splat(self.a);
             let mut t_enter = fine_ray.t0;
             walk(traversal, &macro_ray, self.macro_res, |m, maddr, m_exit| {
                 search.visit_cell();
-                if self.occupied_at(maddr) {
-                    let lo = m * self.a;
-                    let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0: t_enter, t1: m_exit, ..fine_ray };
-                    let fine = &self.fine;
-                    if walk(traversal, &sub, block, |c, _, t_exit| {
-                        fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
-                    }) {
-                        return true;
-                    }
+                // An occupied macrocell's fine walk is a call, keeping the macro walk's loop
+                // small (most macrocells are empty).
+                let entered = std::mem::replace(&mut t_enter, m_exit);
+                if self.occupied_at(maddr) && self.walk_block(m, &fine_ray, entered, m_exit, traversal, search) {
+                    return true;
                 }
-                t_enter = m_exit;
                 search.done_at(m_exit)
             });
+        })
+    }
+
+    /// Walks the fine cells of macrocell `m` along `fine_ray` over `[t0, t1]`; true when the
+    /// search is done.
+    #[inline(never)]
+    fn walk_block(
+        &self,
+        m: UVec3,
+        fine_ray: &GridRay,
+        t0: f32,
+        t1: f32,
+        traversal: Traversal,
+        search: &mut ClosestHit,
+    ) -> bool {
+        let lo = m * self.a;
+        let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0, t1, ..*fine_ray };
+        let fine = &self.fine;
+        walk(traversal, &sub, UVec3::splat(self.a), |c, _, t_exit| {
+            fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
         })
     }
 }

@@ -63,7 +63,11 @@ impl ProximityGrid {
                             return true;
                         }
                     }
-                    search.test_cell(self.grid.cell(idx), t_exit)
+                    // Distance 0 is an occupied cell (the tests are a call, as in the flat grid).
+                    if k != 0 {
+                        return search.done_at(t_exit);
+                    }
+                    self.grid.test_occupied(search, idx, t_exit)
                 });
                 match restart {
                     Some(t) => gr.t0 = t,
