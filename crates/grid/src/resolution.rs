@@ -295,20 +295,31 @@ fn sampled(i: usize, stride: usize) -> bool {
     ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32).is_multiple_of(stride as u64)
 }
 
-/// N_m at each of `resolutions` (increasing) for bounding-box insertion, in one pass over the
+/// N_m at each of `resolutions` (increasing) for insertion `mode`, in one pass over the
 /// triangles. Up to [`EXACT_COUNT_LIMIT`] triangles every count is exact. Above it, a triangle
 /// narrower than a cell at the coarsest resolution ("small") is counted at the finer ones only
 /// if it falls in a hashed 1-in-k sample, and the sample's mean stands in for the rest;
 /// every other ("large") triangle is always counted exactly, so the few big triangles that
 /// dominate N_m in architectural scenes never depend on the sample. The coarsest resolution's
 /// count is always exact. Returns the counts and how many triangles were counted at every m.
+///
+/// Bounding-box counts come from the box alone; exact insertion runs the overlap test per
+/// candidate cell (the same as the build), so for it the sample is what keeps guess-and-check
+/// from costing several builds.
 pub fn count_refs_curve(
     tris: &[[Vec3; 3]],
     bounds: &Aabb,
     resolutions: &[[u32; 3]],
+    mode: InsertMode,
     parallel: bool,
 ) -> (Vec<u64>, usize) {
-    let geoms: Vec<BoxCounter> = resolutions.iter().map(|&r| BoxCounter::new(&GridGeometry::new(bounds, r))).collect();
+    let grids: Vec<GridGeometry> = resolutions.iter().map(|&r| GridGeometry::new(bounds, r)).collect();
+    let geoms: Vec<BoxCounter> = grids.iter().map(BoxCounter::new).collect();
+    // Cells triangle `t` (box `[lo, hi]` relative to the grid corner) goes into at resolution i.
+    let count = |i: usize, t: &[Vec3; 3], lo: glam::DVec3, hi: glam::DVec3| match mode {
+        InsertMode::BoundingBox => geoms[i].cells(lo, hi),
+        InsertMode::Exact => cell_count(&grids[i], &prepare(&grids[i], t, INSERT_MARGIN_CELLS), mode),
+    };
     let k = geoms.len();
     if k == 0 {
         return (Vec::new(), tris.len());
@@ -324,20 +335,20 @@ pub fn count_refs_curve(
         for (j, t) in part.iter().enumerate() {
             let lo = t[0].min(t[1]).min(t[2]).as_dvec3() - min;
             let hi = t[0].max(t[1]).max(t[2]).as_dvec3() - min;
-            let c0 = geoms[0].cells(lo, hi);
+            let c0 = count(0, t, lo, hi);
             if stride > 1 && geoms[0].is_small(lo, hi) {
                 n_small += 1;
                 small[0] += c0;
                 if sampled(base + j, stride) {
                     n_sampled += 1;
-                    for (s, g) in small.iter_mut().zip(&geoms).skip(1) {
-                        *s += g.cells(lo, hi);
+                    for (i, s) in small.iter_mut().enumerate().skip(1) {
+                        *s += count(i, t, lo, hi);
                     }
                 }
             } else {
                 large[0] += c0;
-                for (s, g) in large.iter_mut().zip(&geoms).skip(1) {
-                    *s += g.cells(lo, hi);
+                for (i, s) in large.iter_mut().enumerate().skip(1) {
+                    *s += count(i, t, lo, hi);
                 }
             }
         }
@@ -414,10 +425,7 @@ pub fn samples_at(
     mode: InsertMode,
     parallel: bool,
 ) -> Vec<CostSample> {
-    let counts: Vec<u64> = match mode {
-        InsertMode::BoundingBox => count_refs_curve(tris, bounds, resolutions, parallel).0,
-        InsertMode::Exact => resolutions.iter().map(|&res| count_refs(tris, bounds, res, mode, parallel)).collect(),
-    };
+    let (counts, _) = count_refs_curve(tris, bounds, resolutions, mode, parallel);
     resolutions
         .iter()
         .zip(counts)
