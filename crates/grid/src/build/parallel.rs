@@ -92,12 +92,15 @@ pub fn bucket(
     // slabs small enough that a slab's part of the cell table stays in cache while its
     // triangles, in any order, count and scatter into it (particles in random order made the
     // build super-linear in N).
-    let slabs = (rayon::current_num_threads() * 2).max(cells.div_ceil(SLAB_CELLS)).clamp(1, nz as usize);
-    let edge: Vec<u32> = (0..=slabs).map(|s| (s as u64 * nz as u64 / slabs as u64) as u32).collect();
-    let mut slab_of_layer = vec![0u32; nz as usize];
-    for s in 0..slabs {
-        slab_of_layer[edge[s] as usize..edge[s + 1] as usize].fill(s as u32);
-    }
+    let few = (rayon::current_num_threads() * 2).clamp(1, nz as usize);
+    let layout = |slabs: usize| {
+        let edge: Vec<u32> = (0..=slabs).map(|s| (s as u64 * nz as u64 / slabs as u64) as u32).collect();
+        let mut slab_of_layer = vec![0u32; nz as usize];
+        for s in 0..slabs {
+            slab_of_layer[edge[s] as usize..edge[s + 1] as usize].fill(s as u32);
+        }
+        (edge, slab_of_layer)
+    };
     // Each triangle's cell range, prepared once (count and scatter read it); a slab visits the
     // triangles whose z layers meet it, in increasing order. The ranges' cells bound the
     // references from above (exactly, for box insertion): a grid far over the limit is refused
@@ -123,6 +126,19 @@ pub fn bucket(
     if mode == InsertMode::BoundingBox {
         check_refs(upper)?;
     }
+    // A triangle is copied into every slab it meets: with triangles spanning many thin slabs
+    // (long slivers across the scene) the copies could outgrow the grid, so the copies are held
+    // to four per triangle on average: thin slabs when they allow it, else as many as the
+    // threads share, else one.
+    let many = few.max(cells.div_ceil(SLAB_CELLS)).min(nz as usize);
+    let (slabs, (edge, slab_of_layer)) = [many, few, 1]
+        .into_iter()
+        .map(|n| (n, layout(n)))
+        .find(|(_, (_, of))| {
+            let pairs: u64 = boxes.par_iter().map(|b| (of[b[1].z as usize] - of[b[0].z as usize]) as u64 + 1).sum();
+            pairs <= 4 * tris.len() as u64
+        })
+        .expect("one slab holds each triangle once");
     // The triangles of each slab with their cell ranges (copied, so that a slab reads them in
     // sequence), in increasing order: each chunk of triangles sorts its own by slab (a counting
     // sort), and a slab reads its run of every chunk, chunks in order.
