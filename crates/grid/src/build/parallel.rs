@@ -2,6 +2,9 @@
 //! ranges of cells, so of `cell_start` and `refs` too); triangles are binned by the slabs they
 //! touch, in increasing order, and each slab counts and scatters its own cells without atomics.
 //! The output is therefore bit-identical to the serial [`super::bucket::bucket`], with no sort.
+//! Slabs are thin enough (at most [`SLAB_CELLS`]) that a slab's part of the cell table stays in
+//! cache, and each triangle's cell range is prepared once and copied into the slabs it meets,
+//! so a slab reads its triangles in sequence.
 
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
@@ -131,14 +134,16 @@ pub fn bucket(
     // to four per triangle on average: thin slabs when they allow it, else as many as the
     // threads share, else one.
     let many = few.max(cells.div_ceil(SLAB_CELLS)).min(nz as usize);
-    let (slabs, (edge, slab_of_layer)) = [many, few, 1]
-        .into_iter()
-        .map(|n| (n, layout(n)))
-        .find(|(_, (_, of))| {
-            let pairs: u64 = boxes.par_iter().map(|b| (of[b[1].z as usize] - of[b[0].z as usize]) as u64 + 1).sum();
-            pairs <= 4 * tris.len() as u64
-        })
-        .expect("one slab holds each triangle once");
+    let (slabs, (edge, slab_of_layer)) = times.record("bin", || {
+        [many, few, 1]
+            .into_iter()
+            .map(|n| (n, layout(n)))
+            .find(|(_, (_, of))| {
+                let pairs: u64 = boxes.par_iter().map(|b| (of[b[1].z as usize] - of[b[0].z as usize]) as u64 + 1).sum();
+                pairs <= 4 * tris.len() as u64
+            })
+            .expect("one slab holds each triangle once")
+    });
     // The triangles of each slab with their cell ranges (copied, so that a slab reads them in
     // sequence), in increasing order: each chunk of triangles sorts its own by slab (a counting
     // sort), and a slab reads its run of every chunk, chunks in order.
