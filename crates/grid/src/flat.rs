@@ -57,6 +57,12 @@ impl FlatGrid {
         if !self.is_occupied(index) {
             return &[];
         }
+        self.refs_of(index)
+    }
+
+    /// The references of cell `index`, read from `cell_start` (no occupancy check).
+    #[inline]
+    fn refs_of(&self, index: usize) -> &[u32] {
         &self.refs[self.cell_start[index] as usize..self.cell_start[index + 1] as usize]
     }
 
@@ -77,7 +83,7 @@ impl FlatGrid {
     /// The tests of cell `index`, which holds references.
     #[inline(never)]
     pub(crate) fn test_occupied(&self, search: &mut ClosestHit, index: usize, t_exit: f32) -> bool {
-        search.test_cell(&self.refs[self.cell_start[index] as usize..self.cell_start[index + 1] as usize], t_exit)
+        search.test_cell(self.refs_of(index), t_exit)
     }
 
     pub fn memory_bytes(&self) -> u64 {
@@ -113,9 +119,9 @@ impl FlatGrid {
         #[cfg(feature = "parallel")]
         if opts.parallel {
             let (cell_start, refs) = crate::build::parallel::bucket(tris, &geom, opts.insert, times)?;
-            return Ok(times.record("occupancy", || FlatGrid::new(geom, cell_start, refs)));
+            return Ok(times.record("cell bits", || FlatGrid::new(geom, cell_start, refs)));
         }
         let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;
-        Ok(times.record("occupancy", || FlatGrid::new(geom, cell_start, refs)))
+        Ok(times.record("cell bits", || FlatGrid::new(geom, cell_start, refs)))
     }
 }

@@ -56,6 +56,13 @@ pub fn padded_bounds(bounds: &Aabb) -> Aabb {
     Aabb { min, max }
 }
 
+/// The linear index of cell `c` in a grid of `res` cells: x fastest, then y, then z. The one
+/// cell order of every grid, walk and GPU layout.
+#[inline]
+pub fn linear_index(c: UVec3, res: UVec3) -> usize {
+    (c.x + res.x * (c.y + res.y * c.z)) as usize
+}
+
 impl GridGeometry {
     /// A grid over `bounds` (padded, see [`padded_bounds`]) with resolution `res`, each axis
     /// clamped to `1..=MAX_AXIS_RES`.
@@ -73,7 +80,7 @@ impl GridGeometry {
     /// Linear cell index, x fastest.
     #[inline]
     pub fn cell_index(&self, c: UVec3) -> usize {
-        (c.x + self.res.x * (c.y + self.res.y * c.z)) as usize
+        linear_index(c, self.res)
     }
 
     /// The ray in grid space clipped to the grid box and to `[tmin, tmax]`, or `None` when the

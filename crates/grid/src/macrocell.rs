@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use crate::BuildError;
 use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
-use crate::geometry::{GridGeometry, GridRay};
+use crate::geometry::{GridGeometry, GridRay, linear_index};
 use crate::stats::RayStats;
 use crate::trace::closest_hit::{ClosestHit, closest_hit};
 use crate::traversal::{Traversal, walk};
@@ -104,7 +104,7 @@ impl MacrocellGrid {
 
     #[inline]
     pub fn occupied(&self, m: UVec3) -> bool {
-        self.occupied_at((m.x + self.macro_res.x * (m.y + self.macro_res.y * m.z)) as usize)
+        self.occupied_at(linear_index(m, self.macro_res))
     }
 
     /// Whether the macrocell at linear address `i` holds references.
@@ -183,7 +183,7 @@ fn occupancy(fine: &FlatGrid, a: u32) -> (UVec3, Vec<u32>) {
                 let i = fine.geom.cell_index(c);
                 if fine.cell_start[i + 1] > fine.cell_start[i] {
                     let m = c / a;
-                    let k = (m.x + macro_res.x * (m.y + macro_res.y * m.z)) as usize;
+                    let k = linear_index(m, macro_res);
                     occupancy[k / 32] |= 1 << (k % 32);
                 }
             }

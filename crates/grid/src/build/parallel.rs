@@ -134,24 +134,22 @@ pub fn bucket(
     // to four per triangle on average: thin slabs when they allow it, else as many as the
     // threads share, else one.
     let many = few.max(cells.div_ceil(SLAB_CELLS)).min(nz as usize);
-    let (slabs, (edge, slab_of_layer)) = times.record("bin", || {
-        [many, few, 1]
+    let (slabs, edge, bins) = times.record("bin", || {
+        let (slabs, (edge, slab_of_layer)) = [many, few, 1]
             .into_iter()
             .map(|n| (n, layout(n)))
             .find(|(_, (_, of))| {
                 let pairs: u64 = boxes.par_iter().map(|b| (of[b[1].z as usize] - of[b[0].z as usize]) as u64 + 1).sum();
                 pairs <= 4 * tris.len() as u64
             })
-            .expect("one slab holds each triangle once")
-    });
-    // The triangles of each slab with their cell ranges (copied, so that a slab reads them in
-    // sequence), in increasing order: each chunk of triangles sorts its own by slab (a counting
-    // sort), and a slab reads its run of every chunk, chunks in order.
-    let bins: Vec<SlabBins> = times.record("bin", || {
+            .expect("one slab holds each triangle once");
+        // The triangles of each slab with their cell ranges (copied, so that a slab reads them
+        // in sequence), in increasing order: each chunk of triangles sorts its own by slab (a
+        // counting sort), and a slab reads its run of every chunk, chunks in order.
         const CHUNK: usize = 1 << 14;
         let slab_range =
             |b: &[UVec3; 2]| slab_of_layer[b[0].z as usize] as usize..=slab_of_layer[b[1].z as usize] as usize;
-        boxes
+        let bins: Vec<SlabBins> = boxes
             .par_chunks(CHUNK)
             .enumerate()
             .map(|(k, part)| {
@@ -174,7 +172,8 @@ pub fn bucket(
                 }
                 SlabBins { items, start }
             })
-            .collect()
+            .collect();
+        (slabs, edge, bins)
     });
     drop(boxes);
     let in_slab =

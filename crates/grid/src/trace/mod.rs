@@ -22,7 +22,7 @@ pub struct TraceOptions {
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
     closest_hit(tris, ray, opts.mailbox, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
-        walk(opts.traversal, &gr, grid.geom.res, |_, cell, t_exit| grid.visit(search, cell, t_exit));
+        walk(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| grid.visit(search, index, t_exit));
     })
 }
 

@@ -10,7 +10,7 @@
 use glam::{UVec3, Vec3};
 
 use super::{CellStep, Cursor, argmin3};
-use crate::geometry::GridRay;
+use crate::geometry::{GridRay, linear_index};
 
 #[derive(Clone, Debug)]
 pub struct AmanatidesWoo {
@@ -69,14 +69,14 @@ impl AmanatidesWoo {
     /// then so does this. Every piece of state is a local, one per axis, so the loop runs in
     /// registers; the cells, their order and their exits are the iterator's.
     #[inline]
-    pub fn walk_linear(self, mut visit: impl FnMut(UVec3, usize, f32) -> bool) -> bool {
+    pub(super) fn walk_linear(self, mut visit: impl FnMut(UVec3, usize, f32) -> bool) -> bool {
         let Cursor { cell, res, step, done } = self.cur;
         if done {
             return false;
         }
         let (o, inv, t1) = (self.o, self.inv_d, self.t1);
         let stride = [step.x as isize, (step.y * res.x) as isize, (step.z * res.x * res.y) as isize];
-        let mut addr = (cell.x + res.x * (cell.y + res.y * cell.z)) as isize;
+        let mut addr = linear_index(cell.as_uvec3(), res.as_uvec3()) as isize;
         let (mut cx, mut cy, mut cz) = (cell.x, cell.y, cell.z);
         let (mut wx, mut wy, mut wz) = (self.wall.x, self.wall.y, self.wall.z);
         let (mut tx, mut ty, mut tz) = (self.t_max.x, self.t_max.y, self.t_max.z);

@@ -20,7 +20,7 @@ pub mod liu;
 use glam::{IVec3, UVec3};
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::GridRay;
+use crate::geometry::{GridRay, linear_index};
 
 /// One visited cell and the `t` where the ray leaves it (capped at the segment end).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,7 +124,7 @@ pub fn walk(kind: Traversal, ray: &GridRay, res: UVec3, mut visit: impl FnMut(UV
         res: UVec3,
         visit: &mut impl FnMut(UVec3, usize, f32) -> bool,
     ) -> bool {
-        steps.into_iter().any(|s| visit(s.cell, (s.cell.x + res.x * (s.cell.y + res.y * s.cell.z)) as usize, s.t_exit))
+        steps.into_iter().any(|s| visit(s.cell, linear_index(s.cell, res), s.t_exit))
     }
     match kind {
         Traversal::AmanatidesWoo => amanatides_woo::AmanatidesWoo::new(ray, res).walk_linear(visit),
