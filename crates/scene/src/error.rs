@@ -100,6 +100,13 @@ pub enum SceneError {
     InvalidSkin { source_name: String, skin: usize, detail: String },
     #[error("{source_name}: {at}: morph targets: {detail}")]
     InvalidMorphTargets { source_name: String, at: PrimitiveRef, detail: String },
+    /// `--animation` named no clip of the file.
+    #[error("{source_name}: no animation {key:?}; the file has {available}")]
+    UnknownAnimation { source_name: String, key: String, available: String },
+    /// Posing at a time produced a vertex the grid cannot hold (not finite, or beyond
+    /// [`crate::gltf_load::MAX_COORDINATE`]).
+    #[error("{inner} (animation {clip} at t = {seconds} s)")]
+    AtTime { clip: usize, seconds: f64, inner: Box<SceneError> },
 }
 
 #[derive(Debug, Error)]

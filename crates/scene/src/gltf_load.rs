@@ -24,7 +24,7 @@
 
 use std::path::Path;
 
-use glam::{DMat4, Vec3};
+use glam::Vec3;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
@@ -34,12 +34,22 @@ pub use crate::gltf_file::MAX_FILE_BYTES;
 use crate::gltf_file::{map_gltf_error, precheck, precheck_external_buffers, read_file_bounded, validate};
 pub use crate::load_budget::{LoadLimits, MAX_TRIANGLES};
 use crate::mesh::{LoadReport, Mesh};
+use crate::pose::{PoseScratch, Rig, RigBuilder};
 
 /// Largest coordinate magnitude after transforms: keeps every extent and grid computation
 /// finite in f32 (extents up to 2e30, products of cell counts far from overflow).
 pub const MAX_COORDINATE: f32 = 1e30;
 /// Largest node depth (guards against hierarchies crafted to exhaust the stack).
 pub const MAX_NODE_DEPTH: usize = 256;
+
+/// A loaded scene with what it takes to pose it: `mesh` is the rest pose (no animation
+/// applied), `rig` poses it at any time of any clip into the same index list.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    pub mesh: Mesh,
+    pub rig: Rig,
+    pub report: LoadReport,
+}
 
 /// Loads a `.gltf` or `.glb` file; external buffers are resolved next to it.
 /// With the default [`LoadLimits`].
@@ -49,9 +59,14 @@ pub fn load_path(path: &Path) -> Result<(Mesh, LoadReport), SceneError> {
 
 /// Loads a `.gltf` or `.glb` file within `limits`; external buffers are resolved next to it.
 pub fn load_path_with(path: &Path, limits: &LoadLimits) -> Result<(Mesh, LoadReport), SceneError> {
+    load_rigged_path_with(path, limits).map(|l| (l.mesh, l.report))
+}
+
+/// Loads a file with its [`Rig`] (for posing at animation times).
+pub fn load_rigged_path_with(path: &Path, limits: &LoadLimits) -> Result<Loaded, SceneError> {
     let name = path.display().to_string();
     let bytes = read_file_bounded(path, &name, limits)?;
-    load_slice_with(&bytes, &name, path.parent(), limits)
+    load_rigged_slice_with(&bytes, &name, path.parent(), limits)
 }
 
 /// Loads glTF from memory with the default [`LoadLimits`].
@@ -68,6 +83,16 @@ pub fn load_slice_with(
     base_dir: Option<&Path>,
     limits: &LoadLimits,
 ) -> Result<(Mesh, LoadReport), SceneError> {
+    load_rigged_slice_with(bytes, source_name, base_dir, limits).map(|l| (l.mesh, l.report))
+}
+
+/// [`load_slice_with`], keeping the [`Rig`].
+pub fn load_rigged_slice_with(
+    bytes: &[u8],
+    source_name: &str,
+    base_dir: Option<&Path>,
+    limits: &LoadLimits,
+) -> Result<Loaded, SceneError> {
     let name = source_name.to_string();
     precheck(bytes, &name)?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| map_gltf_error(e, &name))?;
@@ -79,7 +104,7 @@ pub fn load_slice_with(
     let buffers = gltf::import_buffers(&doc, base_dir, gltf.blob).map_err(|e| map_gltf_error(e, &name))?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|d| &d.0[..]).collect();
     crate::animation_data::validate(&doc, &buffers, &name)?;
-    Loader { name, doc: &doc, buffers }.load(&roots, plan)
+    Loader { name, doc: &doc, buffers: &buffers }.load(&roots, plan)
 }
 
 /// The root nodes of the default scene (or scene 0 when none is marked default; or, in a file
@@ -102,20 +127,20 @@ fn root_nodes(doc: &gltf::Document) -> Vec<usize> {
 struct Loader<'a> {
     name: String,
     doc: &'a gltf::Document,
-    buffers: Vec<&'a [u8]>,
+    buffers: &'a [&'a [u8]],
 }
 
-/// One primitive's triangles in local space, cached per (mesh, primitive) so that a mesh used by
-/// many nodes is decoded once.
+/// One primitive's triangles, decoded once per (mesh, primitive) so that a mesh used by many
+/// nodes is decoded once; its vertices live in the rig as primitive `id`.
 struct LocalPrimitive {
-    at: PrimitiveRef,
-    positions: Vec<Vec3>,
+    id: u32,
     triangles: Vec<[u32; 3]>,
 }
 
 impl Loader<'_> {
-    fn load(&self, roots: &[usize], plan: crate::load_budget::Plan) -> Result<(Mesh, LoadReport), SceneError> {
+    fn load(&self, roots: &[usize], plan: crate::load_budget::Plan) -> Result<Loaded, SceneError> {
         let mut report = LoadReport { source: self.name.clone(), ..Default::default() };
+        let mut rig = RigBuilder::new(self.doc, self.buffers, &self.name);
         // Decode every mesh once, in document order.
         let mut meshes: Vec<Vec<Option<LocalPrimitive>>> = Vec::new();
         for mesh in self.doc.meshes() {
@@ -127,7 +152,7 @@ impl Loader<'_> {
                     mesh_name: mesh.name().map(str::to_string),
                     primitive: prim.index(),
                 };
-                prims.push(self.decode_primitive(&prim, at, &mut report)?);
+                prims.push(self.decode_primitive(&prim, at, &mut report, &mut rig)?);
             }
             meshes.push(prims);
         }
@@ -146,10 +171,12 @@ impl Loader<'_> {
         let mut path = Vec::new();
         let nodes: Vec<gltf::Node> = self.doc.nodes().collect();
         for &root in roots {
-            if plan.mesh_below[root] {
-                self.visit(&nodes[root], DMat4::IDENTITY, &meshes, &plan.mesh_below, &mut out, &mut path)?;
+            if plan.visit_below[root] {
+                self.visit(&nodes[root], None, &meshes, &plan.visit_below, &mut out, &mut path, &mut rig)?;
             }
         }
+        let rig = rig.finish()?;
+        rig.pose(None, &mut PoseScratch::default(), &mut out.positions)?;
         if out.indices.is_empty() {
             let detail = if report.skipped_primitives.is_empty() {
                 String::new()
@@ -164,17 +191,19 @@ impl Loader<'_> {
         report.bounds_min = base.bounds_min;
         report.bounds_max = base.bounds_max;
         report.degenerate_triangles = base.degenerate_triangles;
-        Ok((out, report))
+        Ok(Loaded { mesh: out, rig, report })
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn visit(
         &self,
         node: &gltf::Node,
-        parent: DMat4,
+        parent: Option<u32>,
         meshes: &[Vec<Option<LocalPrimitive>>],
-        mesh_below: &[bool],
+        visit_below: &[bool],
         out: &mut Mesh,
         path: &mut Vec<usize>,
+        rig: &mut RigBuilder,
     ) -> Result<(), SceneError> {
         let idx = node.index();
         if path.contains(&idx) {
@@ -191,8 +220,7 @@ impl Loader<'_> {
                 detail: format!("hierarchy deeper than {MAX_NODE_DEPTH} levels"),
             });
         }
-        let local = glam::Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
-        let world = parent * local;
+        let visit = rig.visit(idx, parent);
         if let Some(mesh) = node.mesh() {
             for prim in meshes[mesh.index()].iter().flatten() {
                 let total = out.indices.len() as u64 + prim.triangles.len() as u64;
@@ -204,36 +232,13 @@ impl Loader<'_> {
                         limit: MAX_TRIANGLES,
                     });
                 }
-                let base = out.positions.len() as u32;
-                for (vi, p) in prim.positions.iter().enumerate() {
-                    let w = world.transform_point3(p.as_dvec3()).as_vec3();
-                    if !w.is_finite() {
-                        return Err(SceneError::NonFiniteVertex {
-                            source_name: self.name.clone(),
-                            at: prim.at.clone(),
-                            node: Some(idx),
-                            vertex: vi,
-                            value: w.to_array(),
-                        });
-                    }
-                    if w.abs().max_element() > MAX_COORDINATE {
-                        return Err(SceneError::CoordinateOutOfRange {
-                            source_name: self.name.clone(),
-                            at: prim.at.clone(),
-                            node: idx,
-                            vertex: vi,
-                            value: w.to_array(),
-                            limit: MAX_COORDINATE,
-                        });
-                    }
-                    out.positions.push(w);
-                }
+                let base = rig.instance(visit, idx, prim.id);
                 out.indices.extend(prim.triangles.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
             }
         }
         path.push(idx);
-        for child in node.children().filter(|c| mesh_below[c.index()]) {
-            self.visit(&child, world, meshes, mesh_below, out, path)?;
+        for child in node.children().filter(|c| visit_below[c.index()]) {
+            self.visit(&child, Some(visit), meshes, visit_below, out, path, rig)?;
         }
         path.pop();
         Ok(())
@@ -244,6 +249,7 @@ impl Loader<'_> {
         prim: &gltf::Primitive,
         at: PrimitiveRef,
         report: &mut LoadReport,
+        rig: &mut RigBuilder,
     ) -> Result<Option<LocalPrimitive>, SceneError> {
         let mode = prim.mode();
         if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
@@ -303,7 +309,9 @@ impl Loader<'_> {
             report.skipped_primitives.push(format!("{at}: {} indices make no triangle", indices.len()));
             return Ok(None);
         }
-        Ok(Some(LocalPrimitive { at, positions, triangles }))
+        let skinned = rig.mesh_is_skinned(at.mesh);
+        let id = rig.primitive(prim, at, positions, skinned)?;
+        Ok(Some(LocalPrimitive { id, triangles }))
     }
 
     fn too_large(&self, what: &'static str, count: u64, limit: u64) -> SceneError {
@@ -326,7 +334,7 @@ impl Loader<'_> {
 
     fn read_positions(&self, acc: &gltf::Accessor, at: &PrimitiveRef) -> Result<Vec<Vec3>, SceneError> {
         let ctx = AccessorCtx { at, accessor: acc.index(), semantic: "POSITION" };
-        let c = read_components(&self.buffers, acc).map_err(|f| self.fault(f, ctx))?;
+        let c = read_components(self.buffers, acc).map_err(|f| self.fault(f, ctx))?;
         Ok(c.chunks_exact(3).map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect())
     }
 
@@ -357,7 +365,7 @@ impl Loader<'_> {
         };
         let ctx = AccessorCtx { at, accessor: acc.index(), semantic: "indices" };
         let (bytes, stride) =
-            view_bytes(&self.buffers, &view, acc.offset(), count, size).map_err(|f| self.fault(f, ctx))?;
+            view_bytes(self.buffers, &view, acc.offset(), count, size).map_err(|f| self.fault(f, ctx))?;
         Ok((0..count).map(|i| read_uint(&bytes[i * stride..], size)).collect())
     }
 }

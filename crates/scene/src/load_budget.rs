@@ -70,8 +70,8 @@ pub(crate) struct Plan {
     pub triangles: u64,
     pub vertices: u64,
     pub bytes: u64,
-    /// Per node: a mesh at it or below it (subtrees without one need no visit).
-    pub mesh_below: Vec<bool>,
+    /// Per node: a mesh or a skin joint at it or below it (subtrees without one need no visit).
+    pub visit_below: Vec<bool>,
 }
 
 /// The flag that raises each limit, named in the errors.
@@ -254,11 +254,14 @@ pub(crate) fn check(
         });
     }
     // Children come after their parents in `order`: walk it backwards.
-    let mut mesh_below: Vec<bool> = node_mesh.iter().map(|&m| m != usize::MAX).collect();
-    for &n in order.iter().rev() {
-        mesh_below[n] = mesh_below[n] || children[n].iter().any(|&c| mesh_below[c]);
+    let mut visit_below: Vec<bool> = node_mesh.iter().map(|&m| m != usize::MAX).collect();
+    for j in doc.skins().flat_map(|s| s.joints()) {
+        visit_below[j.index()] = true;
     }
-    Ok(Plan { triangles: triangles as u64, vertices: vertices as u64, bytes: c.bytes as u64, mesh_below })
+    for &n in order.iter().rev() {
+        visit_below[n] = visit_below[n] || children[n].iter().any(|&c| visit_below[c]);
+    }
+    Ok(Plan { triangles: triangles as u64, vertices: vertices as u64, bytes: c.bytes as u64, visit_below })
 }
 
 /// Bytes per element once decoded ([`crate::accessor::read_components`] yields f64 components).

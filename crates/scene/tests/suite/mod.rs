@@ -2,5 +2,6 @@
 pub mod builder;
 pub mod gltf_valid;
 pub mod malformed;
+pub mod pose;
 pub mod procedural;
 pub mod rays;
