@@ -108,6 +108,50 @@ pub enum Command {
     Bench(BenchArgs),
     /// Build and trace the embedded default scene on the CPU, check against brute force, print a summary.
     Demo,
+    /// Play an animation: per frame pose the scene, rebuild the grid from scratch, trace primary
+    /// and shadow rays; pose/build/trace ms per frame, PNG frames and a timeline.
+    Animate(AnimateArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct AnimateArgs {
+    /// Scene file, --animation (default clip 0) and --time (the first frame's time; default the clip's start).
+    #[command(flatten)]
+    pub scene: SceneArg,
+    /// Frames per second of animation time.
+    #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
+    pub fps: f64,
+    /// Number of frames (default: one pass over the clip at --fps). Playback loops over the clip.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub frames: Option<u32>,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Where the rays are traced: cpu (all threads) or gpu (the structure's WGSL kernels).
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub backend: AnimateBackend,
+    /// Image size WIDTHxHEIGHT (one primary and one shadow ray per pixel).
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Write every frame as DIR/frame_NNNNN.png.
+    #[arg(long)]
+    pub frames_dir: Option<PathBuf>,
+    /// Write the timeline (timeline.csv, timeline.json) and its chart (timeline.svg/.png) here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print the timeline as JSON on stdout (and nothing else there).
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AnimateBackend {
+    Cpu,
+    Gpu,
+}
+
+fn parse_fps(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v > 0.0 && v <= 10_000.0 { Ok(v) } else { Err("must be in (0, 10000]".into()) }
 }
 
 /// A scene: a .glb/.gltf path, or `@default` for the embedded default scene.
@@ -115,6 +159,13 @@ pub enum Command {
 pub struct SceneArg {
     /// Scene file (.glb or .gltf), or @default for the embedded default scene.
     pub scene: String,
+    /// Animation clip to pose the scene with, by index or name (`gridrt info` lists them).
+    /// Without --time: the clip's start.
+    #[arg(long)]
+    pub animation: Option<String>,
+    /// Pose the scene at this time in seconds (clamped to the clip). Without --animation: clip 0.
+    #[arg(long, allow_hyphen_values = true)]
+    pub time: Option<f64>,
 }
 
 #[derive(Debug, Args)]

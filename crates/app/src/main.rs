@@ -75,6 +75,7 @@ fn run() -> anyhow::Result<()> {
         Some(cli::Command::BenchTrace(a)) => commands::bench_trace::run(a),
         Some(cli::Command::Experiment(a)) => commands::experiment::run(a),
         Some(cli::Command::Bench(a)) => commands::bench::run(a),
+        Some(cli::Command::Animate(a)) => commands::animate::run(a),
     }
 }
 

@@ -191,6 +191,7 @@ impl Loader<'_> {
         report.bounds_min = base.bounds_min;
         report.bounds_max = base.bounds_max;
         report.degenerate_triangles = base.degenerate_triangles;
+        report.animation = rig.summary_if_any();
         Ok(Loaded { mesh: out, rig, report })
     }
 

@@ -75,6 +75,12 @@ impl Mesh {
         (0..self.indices.len()).map(|i| self.triangle(i)).collect()
     }
 
+    /// [`Mesh::triangles`] into a reused buffer (animation frames).
+    pub fn triangles_into(&self, out: &mut Vec<[Vec3; 3]>) {
+        out.clear();
+        out.extend((0..self.indices.len()).map(|i| self.triangle(i)));
+    }
+
     pub fn bounds(&self) -> Aabb {
         // Only referenced vertices count: an unused vertex far away must not stretch the grid.
         let mut b = Aabb::EMPTY;
@@ -121,6 +127,12 @@ pub struct LoadReport {
     pub primitives: usize,
     /// Primitives that were not turned into triangles, with the reason (points, lines, …).
     pub skipped_primitives: Vec<String>,
+    /// Clips, skins and morph targets, when the file has any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub animation: Option<crate::pose::AnimationSummary>,
+    /// The animation time the triangles were posed at (`None`: the rest pose).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose: Option<crate::pose::PoseNote>,
 }
 
 impl LoadReport {
@@ -137,7 +149,18 @@ impl LoadReport {
             meshes: 1,
             primitives: 1,
             skipped_primitives: Vec::new(),
+            animation: None,
+            pose: None,
         }
+    }
+
+    /// Refreshes what depends on the positions (bounds, degenerate count) after posing.
+    pub fn reposed(&mut self, mesh: &Mesh, pose: Option<crate::pose::PoseNote>) {
+        let fresh = LoadReport::for_mesh(&self.source, mesh);
+        self.bounds_min = fresh.bounds_min;
+        self.bounds_max = fresh.bounds_max;
+        self.degenerate_triangles = fresh.degenerate_triangles;
+        self.pose = pose;
     }
 }
 
@@ -161,6 +184,33 @@ impl std::fmt::Display for LoadReport {
         write!(f, "skipped:     {} primitives", self.skipped_primitives.len())?;
         for s in &self.skipped_primitives {
             write!(f, "\n  - {s}")?;
+        }
+        if let Some(a) = &self.animation {
+            write!(
+                f,
+                "\nanimations:  {} (skins {}, {} joints, {} morph targets; {} skinned and {} morphed mesh instances)",
+                a.clips.len(),
+                a.skins,
+                a.joints,
+                a.morph_targets,
+                a.skinned_instances,
+                a.morphed_instances
+            )?;
+            for c in &a.clips {
+                let name = c.name.as_deref().map(|n| format!(" {n:?}")).unwrap_or_default();
+                write!(
+                    f,
+                    "\n  {}{name}: {:.3} s ({:.3}..{:.3} s), {} channels",
+                    c.index,
+                    c.end - c.start,
+                    c.start,
+                    c.end,
+                    c.channels
+                )?;
+            }
+        }
+        if let Some(p) = &self.pose {
+            write!(f, "\nposed at:    {p}")?;
         }
         Ok(())
     }

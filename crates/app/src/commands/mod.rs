@@ -1,5 +1,6 @@
 //! One module per subcommand, plus the helpers they share.
 
+pub mod animate;
 pub mod bench;
 pub mod bench_trace;
 pub mod build;
@@ -16,16 +17,47 @@ use std::path::Path;
 use anyhow::Context;
 use glam::Vec3;
 use gridrt_grid::{AnyGrid, BuildReport, GridConfig, structure};
-use gridrt_scene::{LoadReport, Mesh};
+use gridrt_scene::{ClipTime, LoadReport, Loaded, Mesh, PoseScratch, Rig};
 
 use crate::cli::SceneArg;
 
-/// Loads the scene named on the command line (`@default`: the embedded one).
+/// Loads the scene named on the command line (`@default`: the embedded one), posed at
+/// `--animation` / `--time` when given.
 pub fn load_scene(arg: &SceneArg) -> anyhow::Result<(Mesh, LoadReport)> {
+    let posed = arg.animation.is_some() || arg.time.is_some();
     if arg.scene == "@default" {
+        anyhow::ensure!(!posed, "the embedded default scene has no animations (--animation / --time)");
         return Ok(gridrt_scene::load_default());
     }
-    Ok(gridrt_scene::gltf_load::load_path_with(Path::new(&arg.scene), &crate::limits::get())?)
+    if !posed {
+        return Ok(gridrt_scene::gltf_load::load_path_with(Path::new(&arg.scene), &crate::limits::get())?);
+    }
+    let Loaded { mut mesh, rig, mut report } = load_rigged(arg)?;
+    let time = clip_time(&rig, arg)?;
+    rig.pose(Some(time), &mut PoseScratch::default(), &mut mesh.positions)?;
+    report.reposed(&mesh, rig.note(time));
+    Ok((mesh, report))
+}
+
+/// Loads the scene file with its rig (for commands that pose it themselves).
+pub fn load_rigged(arg: &SceneArg) -> anyhow::Result<Loaded> {
+    anyhow::ensure!(arg.scene != "@default", "the embedded default scene has no animations");
+    Ok(gridrt_scene::gltf_load::load_rigged_path_with(Path::new(&arg.scene), &crate::limits::get())?)
+}
+
+/// The clip and time `--animation` / `--time` ask for: clip 0 and the clip's start by default.
+pub fn clip_time(rig: &Rig, arg: &SceneArg) -> anyhow::Result<ClipTime> {
+    let clip = match &arg.animation {
+        Some(key) => rig.find_clip(key)?,
+        None => {
+            anyhow::ensure!(!rig.clips().is_empty(), "{}: --time: the file has no animations", arg.scene);
+            0
+        }
+    };
+    if let Some(t) = arg.time {
+        anyhow::ensure!(t.is_finite(), "--time must be a finite number of seconds, not {t}");
+    }
+    Ok(ClipTime { clip, seconds: arg.time.unwrap_or(rig.clips()[clip].start) })
 }
 
 /// Builds the structure `cfg` (from the grid flags).

@@ -41,6 +41,27 @@ pub struct ClipTime {
     pub seconds: f64,
 }
 
+/// Which pose a mesh shows, for reports.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseNote {
+    pub clip: usize,
+    pub name: Option<String>,
+    /// The time asked for, and the time used (clamped to the clip).
+    pub seconds: f64,
+    pub clamped: f64,
+}
+
+impl std::fmt::Display for PoseNote {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = self.name.as_deref().map(|n| format!(" {n:?}")).unwrap_or_default();
+        write!(f, "animation {}{name}, t = {} s", self.clip, self.seconds)?;
+        if self.clamped != self.seconds {
+            write!(f, " (clamped to {} s)", self.clamped)?;
+        }
+        Ok(())
+    }
+}
+
 /// One glTF animation.
 #[derive(Clone, Debug)]
 pub struct Clip {
@@ -233,6 +254,19 @@ impl Rig {
             format!("animations {}", names.join(", "))
         };
         Err(SceneError::UnknownAnimation { source_name: self.source_name.clone(), key: key.into(), available })
+    }
+
+    /// The report line for a pose at `time`.
+    pub fn note(&self, time: ClipTime) -> Option<PoseNote> {
+        let c = self.clips.get(time.clip)?;
+        Some(PoseNote { clip: c.index, name: c.name.clone(), seconds: time.seconds, clamped: c.clamp(time.seconds) })
+    }
+
+    /// What to report about the file's animation (`None` when it has no clips, skins or morph
+    /// targets).
+    pub fn summary_if_any(&self) -> Option<AnimationSummary> {
+        let s = self.summary();
+        (!s.clips.is_empty() || s.skins > 0 || s.morph_targets > 0).then_some(s)
     }
 
     /// Number of vertices a pose writes (the loaded mesh's `positions.len()`).

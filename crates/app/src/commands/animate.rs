@@ -1,0 +1,251 @@
+//! `gridrt animate SCENE`: the survey's dynamic-scene loop. Every frame poses the scene at its
+//! clip time, rebuilds the chosen grid from scratch and traces one primary and one shadow ray
+//! per pixel (CPU on all threads, or the GPU kernels), timing pose, build and trace apart.
+//! Optional PNG frames, a timeline (CSV, JSON, chart) and a JSON summary on stdout.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use gridrt_gpu::{GpuSession, RenderOptions};
+use gridrt_grid::Traversal;
+use gridrt_grid::trace::TraceOptions;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::build_grid;
+use crate::cli::{AnimateArgs, AnimateBackend};
+use crate::lab::animation::{Player, camera, shadow_rays};
+use crate::lab::report::{Chart, Series, progress, save_chart, write_rows};
+
+/// One frame of the timeline.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameRow {
+    pub frame: u32,
+    /// Clip time of the pose, seconds.
+    pub time: f64,
+    pub pose_ms: f64,
+    /// The whole rebuild, resolution choice included.
+    pub build_ms: f64,
+    /// Primary and shadow rays (GPU: upload of the triangles and the grid included).
+    pub trace_ms: f64,
+    pub total_ms: f64,
+    pub grid_bytes: u64,
+    pub primary_hits: u64,
+    /// Shadow rays that hit something (CPU backend only).
+    pub shadowed: Option<u64>,
+}
+
+#[derive(Debug, Serialize)]
+struct Summary {
+    frames: usize,
+    mean_pose_ms: f64,
+    mean_build_ms: f64,
+    mean_trace_ms: f64,
+    mean_total_ms: f64,
+    /// Frames per second of the whole loop (pose + build + trace).
+    frames_per_second: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Timeline<'a> {
+    scene: &'a str,
+    triangles: usize,
+    animation: usize,
+    animation_name: Option<&'a str>,
+    grid: String,
+    backend: &'static str,
+    width: u32,
+    height: u32,
+    fps: f64,
+    frames: &'a [FrameRow],
+    summary: Summary,
+}
+
+pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
+    let loaded = super::load_rigged(&args.scene)?;
+    let source = loaded.report.source.clone();
+    let first = super::clip_time(&loaded.rig, &args.scene)?;
+    let mut player = Player::new(loaded, first.clip);
+    let clip = player.rig.clips()[first.clip].clone();
+    let frames = args.frames.unwrap_or_else(|| ((clip.duration() * args.fps).round() as u32).max(1));
+    let cfg = args.grid.config()?;
+    let (width, height) = args.size;
+    let bounds = player.clip_bounds(16)?;
+    let opts = RenderOptions::new(camera(&bounds, width, height), width, height);
+    let shade = gridrt_gpu::render::shade_params(&bounds, &opts);
+    let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&opts.camera, width, height));
+    let trace_opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let ctx = match args.backend {
+        AnimateBackend::Gpu => Some(super::gpu_context()?),
+        AnimateBackend::Cpu => None,
+    };
+    for dir in [&args.frames_dir, &args.out].into_iter().flatten() {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    if let Some(ctx) = &ctx {
+        // Pipelines compile on the first frame: warm up outside the timing.
+        let (grid, _) = build_grid(&player.tris, &cfg)?;
+        let gpu = GpuSession::new(ctx, &player.tris, bounds)?;
+        gpu.render(&gpu.upload(&grid)?, &RenderOptions { width: 64, height: 48, ..opts })?;
+    }
+
+    let pb = progress(frames as u64, "frames");
+    let mut rows = Vec::with_capacity(frames as usize);
+    let mut shadow = Vec::new();
+    for k in 0..frames {
+        let time = player.frame_time(first.seconds, k, args.fps);
+        let start = Instant::now();
+        player.pose(time)?;
+        let posed = Instant::now();
+        let (grid, _) = build_grid(&player.tris, &cfg)?;
+        let built = Instant::now();
+        let tris = &player.tris;
+        let (primary_hits, shadowed, rgba) = match &ctx {
+            None => {
+                let (hits, st) = grid.trace_batch(tris, &primary, trace_opts, true);
+                shadow_rays(&shade, &primary, &hits, &mut shadow);
+                let (shadow_hits, sst) = grid.trace_batch(tris, &shadow, trace_opts, true);
+                let traced = Instant::now();
+                let rgba = args.frames_dir.as_ref().map(|_| cpu_pixels(tris, &shade, &primary, &hits, &shadow_hits));
+                (st.hits, Some(sst.hits), (traced, rgba))
+            }
+            Some(ctx) => {
+                let gpu = GpuSession::new(ctx, tris, bounds)?;
+                let frame = gpu.render(&gpu.upload(&grid)?, &opts)?;
+                let traced = Instant::now();
+                let hits = frame.hits.iter().filter(|h| h.is_hit()).count() as u64;
+                (hits, None, (traced, Some(frame.rgba)))
+            }
+        };
+        let (traced, rgba) = rgba;
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        rows.push(FrameRow {
+            frame: k,
+            time,
+            pose_ms: ms(start, posed),
+            build_ms: ms(posed, built),
+            trace_ms: ms(built, traced),
+            total_ms: ms(start, traced),
+            grid_bytes: grid.memory_bytes(),
+            primary_hits,
+            shadowed,
+        });
+        if let (Some(dir), Some(rgba)) = (&args.frames_dir, rgba) {
+            let path = dir.join(format!("frame_{k:05}.png"));
+            image::save_buffer(&path, &rgba, width, height, image::ExtendedColorType::Rgba8)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+
+    let n = rows.len() as f64;
+    let mean = |f: fn(&FrameRow) -> f64| rows.iter().map(f).sum::<f64>() / n;
+    let summary = Summary {
+        frames: rows.len(),
+        mean_pose_ms: mean(|r| r.pose_ms),
+        mean_build_ms: mean(|r| r.build_ms),
+        mean_trace_ms: mean(|r| r.trace_ms),
+        mean_total_ms: mean(|r| r.total_ms),
+        frames_per_second: 1e3 / mean(|r| r.total_ms),
+    };
+    if let Some(out) = &args.out {
+        write_rows(out, "timeline", &rows)?;
+        save_chart(out, "timeline", &timeline_chart(&source, cfg.kind.name(), &rows))?;
+    }
+    let backend = match args.backend {
+        AnimateBackend::Cpu => "cpu",
+        AnimateBackend::Gpu => "gpu",
+    };
+    if args.json {
+        let t = Timeline {
+            scene: &source,
+            triangles: player.tris.len(),
+            animation: clip.index,
+            animation_name: clip.name.as_deref(),
+            grid: cfg.kind.name().into(),
+            backend,
+            width,
+            height,
+            fps: args.fps,
+            frames: &rows,
+            summary,
+        };
+        println!("{}", serde_json::to_string_pretty(&t)?);
+        return Ok(());
+    }
+    let name = clip.name.as_deref().map(|n| format!(" {n:?}")).unwrap_or_default();
+    println!(
+        "{source} ({} triangles), animation {}{name}: {} frames at {} fps, {} grid rebuilt every frame, {width}x{height} primary + shadow rays on the {backend}",
+        player.tris.len(),
+        clip.index,
+        rows.len(),
+        args.fps,
+        cfg.kind
+    );
+    println!(
+        "per frame: pose {:.2} ms, build {:.2} ms, trace {:.2} ms, total {:.2} ms ({:.1} frames/s)",
+        summary.mean_pose_ms,
+        summary.mean_build_ms,
+        summary.mean_trace_ms,
+        summary.mean_total_ms,
+        summary.frames_per_second
+    );
+    if let Some(dir) = &args.frames_dir {
+        println!("frames: {}", dir.join("frame_NNNNN.png").display());
+    }
+    if let Some(out) = &args.out {
+        print_written(out);
+    }
+    Ok(())
+}
+
+fn print_written(out: &Path) {
+    println!("timeline: {}", out.join("timeline.{csv,json,svg,png}").display());
+}
+
+/// The shaded image from CPU hits (the CPU port of shade.wgsl), for PNG frames.
+fn cpu_pixels(
+    tris: &[[glam::Vec3; 3]],
+    shade: &gridrt_gpu::layout::ShadeParams,
+    primary: &[gridrt_scene::Ray],
+    hits: &[gridrt_scene::Hit],
+    shadow_hits: &[gridrt_scene::Hit],
+) -> Vec<u8> {
+    let stats = gridrt_grid::RayStats::default();
+    (0..primary.len())
+        .into_par_iter()
+        .map(|i| {
+            let tri = if hits[i].is_hit() { tris[hits[i].triangle as usize] } else { [glam::Vec3::ZERO; 3] };
+            gridrt_gpu::cpu::shade_pixel(shade, &primary[i], &hits[i], &stats, &shadow_hits[i], tri)
+        })
+        .collect::<Vec<u32>>()
+        .into_iter()
+        .flat_map(u32::to_le_bytes)
+        .collect()
+}
+
+fn timeline_chart(source: &str, grid: &str, rows: &[FrameRow]) -> Chart {
+    let series = |label: &str, f: fn(&FrameRow) -> f64| Series {
+        label: label.into(),
+        points: rows.iter().map(|r| (r.frame as f64, f(r))).collect(),
+        predicted: false,
+    };
+    let file = Path::new(source).file_name().map_or(source.into(), |f| f.to_string_lossy().into_owned());
+    Chart {
+        title: format!("{file}: {grid} grid rebuilt every frame"),
+        x_label: "frame".into(),
+        y_label: "ms".into(),
+        log_x: false,
+        log_y: false,
+        series: vec![
+            series("pose", |r| r.pose_ms),
+            series("build", |r| r.build_ms),
+            series("trace (primary + shadow)", |r| r.trace_ms),
+            series("total", |r| r.total_ms),
+        ],
+        markers: vec![],
+        x_names: None,
+    }
+}
