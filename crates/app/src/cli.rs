@@ -264,6 +264,9 @@ pub enum GenKind {
     Particles,
     Slivers,
     TeapotInStadium,
+    /// Animated: skinned tubes swaying (one skin each) and rigid balls orbiting, on a floor;
+    /// --size is the number of tubes (500: about 1M triangles).
+    Crowd,
 }
 
 #[derive(Debug, Args)]

@@ -4,6 +4,7 @@
 pub(crate) mod accessor;
 pub(crate) mod animation_data;
 pub mod camera;
+pub mod crowd;
 pub mod error;
 mod file_read;
 pub mod glb_write;
