@@ -219,12 +219,8 @@ pub fn crowd_glb(tubes: u32, seed: u64) -> Vec<u8> {
             .push(json!({"sampler": s, "target": {"node": node, "path": path}}));
     };
     // Samplers of each phase bucket's joints, made once.
-    let mut sway_samplers = vec![[0usize; JOINTS]; PHASES];
-    for (p, per_joint) in sway.iter().enumerate() {
-        for k in 0..JOINTS {
-            sway_samplers[p][k] = sampler(&mut b, per_joint[k], "LINEAR");
-        }
-    }
+    let sway_samplers: Vec<Vec<usize>> =
+        sway.iter().map(|per_joint| per_joint.iter().map(|&out| sampler(&mut b, out, "LINEAR")).collect()).collect();
     // A skinned mesh's own node transform is ignored: the meshes hang under a moved parent.
     let skinned_parent =
         b.push("nodes", json!({"name": "skinned meshes", "children": [], "translation": [1e3, 0.0, 0.0]}));
@@ -240,11 +236,11 @@ pub fn crowd_glb(tubes: u32, seed: u64) -> Vec<u8> {
             let phase = rng.below(PHASES as u64) as usize;
             let mut chain = Vec::new();
             let mut parent = root;
-            for k in 0..JOINTS {
+            for (k, &joint_sampler) in sway_samplers[phase].iter().enumerate() {
                 let t = if k == 0 { at } else { Vec3::new(0.0, joint_y(k) - joint_y(k - 1), 0.0) };
                 let n = b.push("nodes", json!({"translation": t.to_array(), "children": []}));
                 add_child(&mut b, parent, n);
-                channel(&mut b, sway_samplers[phase][k], n, "rotation");
+                channel(&mut b, joint_sampler, n, "rotation");
                 chain.push(n);
                 parent = n;
             }
