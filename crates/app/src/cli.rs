@@ -483,6 +483,14 @@ pub struct BenchArgs {
     /// Two scenes, fewer rays, small scaling sizes (a smoke run).
     #[arg(long)]
     pub quick: bool,
+    /// Dynamic scenes instead: every animated scene (<scenes>/animated) and a generated crowd of
+    /// ≥ 1M triangles, posed per frame; every grid rebuilt and every BVH rebuilt or refit per
+    /// frame, tracing 512×512 primary and shadow rays.
+    #[arg(long)]
+    pub dynamic: bool,
+    /// Frames per animated scene (evenly over its first clip) with --dynamic.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub frames: u32,
 }
 
 #[derive(Debug, Args)]

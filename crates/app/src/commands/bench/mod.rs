@@ -9,6 +9,7 @@
 //! Every structure's hits are compared with the flat grid's on every ray: a benchmark of wrong
 //! answers is worthless, so disagreements are counted and printed.
 
+pub mod dynamic;
 #[cfg(feature = "peers")]
 pub mod peers;
 pub mod scaling;
@@ -344,6 +345,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     eprintln!("bench: auto resolution with {cost_note}");
     #[cfg(not(feature = "peers"))]
     eprintln!("bench: built without the `peers` feature: no bvh/obvhs rows");
+    if args.dynamic {
+        return dynamic::run(&args, &cost);
+    }
     let scenes = pick_scenes(&args)?;
     let gpu = if args.no_gpu { None } else { Some(super::gpu_context()?) };
     let subjects = Subject::all(!args.no_peers).len();

@@ -268,6 +268,25 @@ impl PeerBvh {
         }
     }
 
+    /// Refits an obvhs BVH2 to its triangles moved in place (same order): every leaf's box from
+    /// its triangles, then the inner nodes bottom-up (`Bvh2::refit_all`). The tree keeps its
+    /// topology, so its quality decays as the triangles move. `false` for the other peers.
+    pub fn refit(&mut self, tris: &[[Vec3; 3]]) -> bool {
+        let PeerBvh::Bvh2(b) = self else { return false };
+        let Bvh2 { nodes, primitive_indices, .. } = b;
+        for node in nodes.iter_mut().filter(|n| n.is_leaf()) {
+            let mut bb = obvhs::aabb::Aabb::empty();
+            for &p in &primitive_indices[node.first_index as usize..(node.first_index + node.prim_count) as usize] {
+                for v in tris[p as usize] {
+                    bb.extend(v.into());
+                }
+            }
+            node.set_aabb(bb);
+        }
+        b.refit_all();
+        true
+    }
+
     /// The closest hits of `rays`, on all threads.
     pub fn trace_batch(&self, tris: &[[Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
         use rayon::prelude::*;

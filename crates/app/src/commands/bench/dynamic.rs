@@ -1,0 +1,326 @@
+//! `gridrt bench --dynamic`: the survey's case for grids, measured. On every animated scene
+//! (`<scenes>/animated`, default ../shared/scenes/animated) and a generated crowd of ≥ 1M
+//! triangles, each frame is posed once; then every grid kind is rebuilt from scratch and every
+//! BVH strategy is rebuilt (obvhs BVH2 `fastest_build`, obvhs CWBVH, `bvh`'s `build_par`) or
+//! refit (obvhs BVH2, built once with `medium_build`), and all trace the same 512×512 primary
+//! rays and the same shadow rays (from the flat grid's primary hits). Build and trace time per
+//! frame are reported apart; hits are compared with the flat grid's as in `gridrt bench`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use gridrt_grid::trace::TraceOptions;
+use gridrt_grid::{CostModel, GridConfig, GridKind, Traversal, structure};
+use gridrt_scene::{Hit, LoadLimits, Ray};
+use serde::Serialize;
+
+use super::agree;
+use crate::cli::BenchArgs;
+use crate::lab::animation::{Player, camera, shadow_rays};
+use crate::lab::report::{print_table, progress, write_rows};
+use crate::lab::scenes::default_scenes;
+
+/// Image size of the dynamic frames.
+const SIZE: u32 = 512;
+
+/// One structure's strategy on one animated scene, averaged over the frames.
+#[derive(Clone, Debug, Serialize)]
+pub struct DynamicRow {
+    pub scene: String,
+    pub triangles: usize,
+    pub structure: String,
+    /// "grid" or "peer".
+    pub family: &'static str,
+    /// "rebuild" every frame, or "refit" a tree built once (its first build is `setup_ms`).
+    pub strategy: &'static str,
+    pub frames: usize,
+    pub pose_ms: f64,
+    pub setup_ms: f64,
+    pub build_ms: f64,
+    /// Primary and shadow rays, all threads.
+    pub trace_ms: f64,
+    /// build + trace (pose is the same for everyone and reported apart).
+    pub total_ms: f64,
+    /// Primary and shadow rays whose hit disagrees with the flat grid's (see `agree`).
+    pub mismatches: u64,
+}
+
+/// The best grid against the best BVH strategy on one scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct DynamicTarget {
+    pub scene: String,
+    pub triangles: usize,
+    pub best_grid: String,
+    pub best_bvh: String,
+    /// best BVH total / best grid total: the goal is ≥ 1.5.
+    pub speedup: f64,
+    pub build_speedup: f64,
+    pub trace_ratio: f64,
+    pub met: bool,
+}
+
+/// A strategy under test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Strategy {
+    Grid(GridKind),
+    #[cfg(feature = "peers")]
+    Rebuild(super::peers::PeerKind),
+    #[cfg(feature = "peers")]
+    Refit,
+}
+
+impl Strategy {
+    fn all(with_peers: bool) -> Vec<Strategy> {
+        let mut v: Vec<Strategy> = GridKind::ALL.iter().map(|&k| Strategy::Grid(k)).collect();
+        #[cfg(feature = "peers")]
+        if with_peers {
+            use super::peers::PeerKind;
+            v.extend([PeerKind::ObvhsFastest, PeerKind::ObvhsCwbvh, PeerKind::Bvh].map(Strategy::Rebuild));
+            v.push(Strategy::Refit);
+        }
+        let _ = with_peers;
+        v
+    }
+
+    fn name(self) -> String {
+        match self {
+            Strategy::Grid(k) => k.name().into(),
+            #[cfg(feature = "peers")]
+            Strategy::Rebuild(p) => p.name().into(),
+            #[cfg(feature = "peers")]
+            Strategy::Refit => "obvhs BVH2 medium, refit".into(),
+        }
+    }
+}
+
+/// A structure built for one frame.
+enum Built {
+    Grid(gridrt_grid::AnyGrid),
+    #[cfg(feature = "peers")]
+    Peer(super::peers::PeerBvh),
+}
+
+impl Built {
+    fn trace(&self, tris: &[[glam::Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
+        match self {
+            Built::Grid(g) => {
+                g.trace_batch(tris, rays, TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true }, true).0
+            }
+            #[cfg(feature = "peers")]
+            Built::Peer(p) => p.trace_batch(tris, rays),
+        }
+    }
+}
+
+/// The animated scenes: every .glb/.gltf of `<scenes>/animated` (none with --procedural); the
+/// generated crowd is added by the caller.
+fn scene_files(args: &BenchArgs) -> Vec<PathBuf> {
+    let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
+    let mut files: Vec<PathBuf> = dir
+        .and_then(|d| std::fs::read_dir(d.join("animated")).ok())
+        .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    files.retain(|p| p.extension().is_some_and(|e| e == "glb" || e == "gltf"));
+    files.sort();
+    if args.quick {
+        files.retain(|p| p.file_name().is_some_and(|f| f == "LittlestTokyo.glb" || f == "Fox.glb"));
+    }
+    files
+}
+
+pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<()> {
+    let mut files = scene_files(args);
+    let crowd_tubes = if args.quick { 20 } else { gridrt_scene::crowd::tubes_for(1_000_000) };
+    let crowd = args.out.join("crowd.glb");
+    std::fs::write(&crowd, gridrt_scene::crowd::crowd_glb(crowd_tubes, 1))?;
+    files.push(crowd);
+    let strategies = Strategy::all(!args.no_peers);
+    let frames = args.frames.max(1) as usize;
+    let pb = progress((files.len() * frames) as u64, "dynamic");
+    let mut rows = Vec::new();
+    for f in &files {
+        rows.extend(bench_scene(f, &strategies, frames, cost, &pb)?);
+    }
+    pb.finish_and_clear();
+    let targets = evaluate(&rows);
+    write_rows(&args.out, "bench-dynamic", &rows)?;
+    write_rows(&args.out, "bench-dynamic-targets", &targets)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&serde_json::json!({"rows": rows, "targets": targets}))?);
+        return Ok(());
+    }
+    print_table(
+        &["scene", "triangles", "structure", "strategy", "pose ms", "build ms", "trace ms", "total ms", "mismatches"],
+        &rows
+            .iter()
+            .map(|r| {
+                vec![
+                    r.scene.clone(),
+                    r.triangles.to_string(),
+                    r.structure.clone(),
+                    r.strategy.into(),
+                    format!("{:.2}", r.pose_ms),
+                    format!("{:.2}", r.build_ms),
+                    format!("{:.2}", r.trace_ms),
+                    format!("{:.2}", r.total_ms),
+                    r.mismatches.to_string(),
+                ]
+            })
+            .collect::<Vec<_>>(),
+    );
+    println!();
+    print_table(
+        &["scene", "best grid", "best BVH strategy", "speedup (goal ≥ 1.5)", "build", "trace", "met"],
+        &targets
+            .iter()
+            .map(|t| {
+                vec![
+                    t.scene.clone(),
+                    t.best_grid.clone(),
+                    t.best_bvh.clone(),
+                    format!("{:.2}", t.speedup),
+                    format!("{:.2}", t.build_speedup),
+                    format!("{:.2}", t.trace_ratio),
+                    if t.met { "yes".into() } else { "no".into() },
+                ]
+            })
+            .collect::<Vec<_>>(),
+    );
+    println!("\nrows and targets in {}", args.out.display());
+    Ok(())
+}
+
+fn bench_scene(
+    path: &Path,
+    strategies: &[Strategy],
+    frames: usize,
+    cost: &CostModel,
+    pb: &indicatif::ProgressBar,
+) -> anyhow::Result<Vec<DynamicRow>> {
+    let name = path.file_name().map_or_else(|| path.display().to_string(), |f| f.to_string_lossy().into_owned());
+    let loaded = gridrt_scene::gltf_load::load_rigged_path_with(path, &LoadLimits::default())?;
+    anyhow::ensure!(!loaded.rig.clips().is_empty(), "{name}: no animation");
+    let mut player = Player::new(loaded, 0);
+    let clip = player.rig.clips()[0].clone();
+    let bounds = player.clip_bounds(16)?;
+    let opts = gridrt_gpu::RenderOptions::new(camera(&bounds, SIZE, SIZE), SIZE, SIZE);
+    let shade = gridrt_gpu::render::shade_params(&bounds, &opts);
+    let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&opts.camera, SIZE, SIZE));
+    let mut shadow = Vec::new();
+    // Per strategy: sums of setup, build, trace ms and mismatches; and the refit tree.
+    let mut sums = vec![(0.0f64, 0.0f64, 0.0f64, 0u64); strategies.len()];
+    #[cfg(feature = "peers")]
+    let mut refit_tree: Option<super::peers::PeerBvh> = None;
+    let mut pose_ms = 0.0;
+    for k in 0..frames {
+        pb.set_message(format!("{name} · frame {k}"));
+        let t = clip.start + clip.duration() * k as f64 / frames as f64;
+        let start = Instant::now();
+        player.pose(t)?;
+        pose_ms += start.elapsed().as_secs_f64() * 1e3;
+        let tris = &player.tris;
+        let mut reference: Option<(Vec<Hit>, Vec<Hit>)> = None;
+        for (s, &strategy) in strategies.iter().enumerate() {
+            // The refit tree's first build is its setup, not a frame's build.
+            let mut setup_frame = false;
+            let start = Instant::now();
+            let built = match strategy {
+                Strategy::Grid(kind) => {
+                    Built::Grid(structure::build(tris, &GridConfig { kind, cost: *cost, ..GridConfig::default() })?.0)
+                }
+                #[cfg(feature = "peers")]
+                Strategy::Rebuild(p) => Built::Peer(super::peers::build(p, tris)),
+                #[cfg(feature = "peers")]
+                Strategy::Refit => Built::Peer(match refit_tree.take() {
+                    Some(mut tree) => {
+                        tree.refit(tris);
+                        tree
+                    }
+                    None => {
+                        setup_frame = true;
+                        super::peers::build(super::peers::PeerKind::ObvhsMedium, tris)
+                    }
+                }),
+            };
+            let built_at = Instant::now();
+            let hits = built.trace(tris, &primary);
+            if reference.is_none() {
+                shadow_rays(&shade, &primary, &hits, &mut shadow);
+            }
+            let shadow_hits = built.trace(tris, &shadow);
+            let traced = Instant::now();
+            let (reference_primary, reference_shadow) =
+                reference.get_or_insert_with(|| (hits.clone(), shadow_hits.clone()));
+            let bad = hits.iter().zip(reference_primary.iter()).filter(|(a, b)| !agree(a, b)).count()
+                + shadow_hits.iter().zip(reference_shadow.iter()).filter(|(a, b)| !agree(a, b)).count();
+            let build_ms = (built_at - start).as_secs_f64() * 1e3;
+            if setup_frame {
+                sums[s].0 += build_ms;
+            } else {
+                sums[s].1 += build_ms;
+            }
+            sums[s].2 += (traced - built_at).as_secs_f64() * 1e3;
+            sums[s].3 += bad as u64;
+            #[cfg(feature = "peers")]
+            if let (Strategy::Refit, Built::Peer(tree)) = (strategy, built) {
+                refit_tree = Some(tree);
+            }
+        }
+        pb.inc(1);
+    }
+    let n = frames as f64;
+    Ok(strategies
+        .iter()
+        .zip(&sums)
+        .map(|(&strategy, &(setup, build, trace, bad))| {
+            let grid = matches!(strategy, Strategy::Grid(_));
+            #[cfg(feature = "peers")]
+            let refit = strategy == Strategy::Refit;
+            #[cfg(not(feature = "peers"))]
+            let refit = false;
+            // A refit's first frame is its setup build: averaged over the remaining frames.
+            let build_frames = if refit { (n - 1.0).max(1.0) } else { n };
+            DynamicRow {
+                scene: name.clone(),
+                triangles: player.tris.len(),
+                structure: strategy.name(),
+                family: if grid { "grid" } else { "peer" },
+                strategy: if refit { "refit" } else { "rebuild" },
+                frames,
+                pose_ms: pose_ms / n,
+                setup_ms: setup,
+                build_ms: build / build_frames,
+                trace_ms: trace / n,
+                total_ms: build / build_frames + trace / n,
+                mismatches: bad,
+            }
+        })
+        .collect())
+}
+
+/// Per scene: the best grid (least build + trace) against the best BVH strategy.
+fn evaluate(rows: &[DynamicRow]) -> Vec<DynamicTarget> {
+    let mut out = Vec::new();
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let best = |family: &str| {
+            rows.iter()
+                .filter(|r| r.scene == scene && r.family == family)
+                .min_by(|a, b| a.total_ms.total_cmp(&b.total_ms))
+        };
+        let (Some(g), Some(b)) = (best("grid"), best("peer")) else { continue };
+        let speedup = b.total_ms / g.total_ms;
+        out.push(DynamicTarget {
+            scene: scene.into(),
+            triangles: g.triangles,
+            best_grid: g.structure.clone(),
+            best_bvh: format!("{} ({})", b.structure, b.strategy),
+            speedup,
+            build_speedup: b.build_ms / g.build_ms,
+            trace_ratio: b.trace_ms / g.trace_ms,
+            met: speedup >= 1.5,
+        });
+    }
+    out
+}
