@@ -113,6 +113,94 @@ fn pipeline_gen_info_build_rays_trace() {
     }
 }
 
+/// The dynamic path on a generated animated scene: info lists the clip, --animation/--time pose
+/// it (grid hits equal brute force over the posed triangles at several times, and differ from
+/// the rest pose), animate writes frames, a timeline and JSON, and bench --dynamic compares
+/// every grid with the BVH strategies.
+#[test]
+fn animated_scene_info_pose_trace_animate_and_bench() {
+    let scene = tmp("crowd.glb");
+    ok(&["gen", "crowd", "--size", "6", "-o", s(&scene)]);
+    let v: serde_json::Value = serde_json::from_str(&ok(&["info", s(&scene), "--json"])).unwrap();
+    assert_eq!(v["animation"]["clips"][0]["name"], "sway");
+    assert_eq!(v["animation"]["skins"], 6);
+    let text = ok(&["info", s(&scene), "--animation", "sway", "--time", "1.5"]);
+    assert!(text.contains("posed at:    animation 0 \"sway\", t = 1.5 s"), "{text}");
+    fails(&["info", s(&scene), "--animation", "walk"], "no animation \"walk\"");
+    fails(&["info", "@default", "--time", "1"], "no animations");
+
+    let rays = tmp("crowd-rays.bin");
+    ok(&["rays", s(&scene), "--time", "0.7", "--kind", "framed", "--count", "4000", "-o", s(&rays)]);
+    let mut poses = Vec::new();
+    for time in ["0.7", "2.2", "-5", "99"] {
+        let brute = tmp(&format!("crowd-{time}-brute.hits"));
+        ok(&["trace", s(&scene), "--time", time, "--rays", s(&rays), "-o", s(&brute), "--backend", "brute"]);
+        let want = std::fs::read(&brute).unwrap();
+        for grid in ["flat", "macrocell", "multires", "twolevel", "proximity"] {
+            let hits = tmp(&format!("crowd-{time}-{grid}.hits"));
+            ok(&["trace", s(&scene), "--time", time, "--rays", s(&rays), "-o", s(&hits), "--grid", grid]);
+            assert!(std::fs::read(&hits).unwrap() == want, "t = {time}, {grid}: hits differ from brute force");
+        }
+        poses.push(want);
+    }
+    assert!(poses[0] != poses[1], "the crowd moves between t = 0.7 and t = 2.2");
+    let rest = tmp("crowd-rest.hits");
+    ok(&["trace", s(&scene), "--rays", s(&rays), "-o", s(&rest), "--backend", "brute"]);
+    assert!(std::fs::read(&rest).unwrap() != poses[0], "a pose differs from the rest pose");
+
+    let frames = tmp("crowd-frames");
+    let out = tmp("crowd-timeline");
+    let json = ok(&[
+        "animate",
+        s(&scene),
+        "--frames",
+        "3",
+        "--size",
+        "48x32",
+        "--grid",
+        "twolevel",
+        "--frames-dir",
+        s(&frames),
+        "--out",
+        s(&out),
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["frames"].as_array().unwrap().len(), 3);
+    for key in ["time", "pose_ms", "build_ms", "trace_ms", "total_ms", "primary_hits", "shadowed"] {
+        assert!(!v["frames"][2][key].is_null(), "animate --json lacks {key}: {json}");
+    }
+    assert!((v["frames"][1]["time"].as_f64().unwrap() - 1.0 / 30.0).abs() < 1e-9);
+    assert!(v["frames"][0]["primary_hits"].as_u64().unwrap() > 0);
+    for f in ["frame_00000.png", "frame_00002.png"] {
+        let img = image::open(frames.join(f)).unwrap();
+        assert_eq!((img.width(), img.height()), (48, 32));
+    }
+    for f in ["timeline.csv", "timeline.json", "timeline.svg", "timeline.png"] {
+        assert!(out.join(f).exists(), "animate --out lacks {f}");
+    }
+
+    let bench = tmp("crowd-bench");
+    let v: serde_json::Value = serde_json::from_str(&ok(&[
+        "bench",
+        "--dynamic",
+        "--procedural",
+        "--quick",
+        "--frames",
+        "2",
+        "--out",
+        s(&bench),
+        "--json",
+    ]))
+    .unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert!(rows.iter().any(|r| r["strategy"] == "refit"), "bench --dynamic has no refit row");
+    for r in rows.iter().filter(|r| r["family"] == "grid") {
+        assert_eq!(r["mismatches"], 0, "{r}");
+    }
+    assert!(v["targets"][0]["speedup"].as_f64().unwrap() > 0.0);
+}
+
 #[test]
 fn bad_inputs_fail_with_clear_messages() {
     let scene = tmp("one.glb");
