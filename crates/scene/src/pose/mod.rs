@@ -15,12 +15,13 @@
 //!
 //! With no clip, the rest pose is the one `load` returns: the loader itself poses through here.
 //! A pose reuses its [`PoseScratch`] and position buffer (no allocation after the first frame)
-//! and runs the vertices on all threads.
+//! and runs the vertices on all threads (feature `parallel`, on by default; off in the browser).
 
 mod build;
 pub(crate) mod sampler;
 
 use glam::{DMat4, DQuat, DVec3, Vec3};
+#[cfg(feature = "parallel")]
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -312,8 +313,11 @@ impl Rig {
     ) -> Result<(), SceneError> {
         self.pose_nodes(time, scratch);
         positions.resize(self.vertex_count, Vec3::ZERO);
-        let bad = positions
-            .par_chunks_mut(VERTEX_CHUNK)
+        #[cfg(feature = "parallel")]
+        let chunks = positions.par_chunks_mut(VERTEX_CHUNK);
+        #[cfg(not(feature = "parallel"))]
+        let chunks = positions.chunks_mut(VERTEX_CHUNK);
+        let bad = chunks
             .enumerate()
             .filter_map(|(c, chunk)| self.pose_vertices(c * VERTEX_CHUNK, chunk, scratch))
             .min_by_key(|&(v, _)| v);
