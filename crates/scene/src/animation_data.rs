@@ -1,22 +1,20 @@
-//! Validation of the data that poses a glTF scene — animation samplers, skins and morph
-//! targets — so that whatever poses it later can trust every key, joint and weight. The
-//! rules are the glTF 2.0 specification's: sampler times finite and strictly increasing, output
-//! counts matching the keys (×3 for CUBICSPLINE, × morph targets for weights), finite values,
-//! joint indices inside the skin, enough inverse bind matrices, and morph target counts that
-//! agree within a mesh. Element counts were already checked by [`crate::load_budget`].
-
-use std::collections::HashSet;
+//! Validation of the shape of the data that poses a glTF scene — animation samplers, skins and
+//! morph targets — from the JSON alone, before any of it is decoded: the glTF 2.0 rules on
+//! accessor types, output counts matching the keys (×3 for CUBICSPLINE, × morph targets for
+//! weights), one JOINTS/WEIGHTS element per vertex, enough inverse bind matrices, and morph
+//! target counts that agree within a mesh. The values themselves (times finite and strictly
+//! increasing, finite outputs, matrices and deltas, joint indices inside the skin) are checked
+//! where they are decoded, once, by [`crate::pose`]'s builder. Element counts were already
+//! checked by [`crate::load_budget`].
 
 use gltf::Document;
-use gltf::accessor::{Accessor, DataType, Dimensions};
+use gltf::accessor::{DataType, Dimensions};
 use gltf::animation::{Interpolation, Property};
 
-use crate::accessor::read_components;
 use crate::error::{PrimitiveRef, SceneError};
 
-/// Checks every animation, skin and morph target of `doc`.
-pub(crate) fn validate(doc: &Document, buffers: &[&[u8]], name: &str) -> Result<(), SceneError> {
-    let read = |acc: &Accessor| read_components(buffers, acc);
+/// Checks the shape of every animation, skin and morph target of `doc`.
+pub(crate) fn validate(doc: &Document, name: &str) -> Result<(), SceneError> {
     for anim in doc.animations() {
         let fail = |sampler: Option<usize>, detail: String| SceneError::InvalidAnimation {
             source_name: name.into(),
@@ -30,27 +28,11 @@ pub(crate) fn validate(doc: &Document, buffers: &[&[u8]], name: &str) -> Result<
             if input.data_type() != DataType::F32 || input.dimensions() != Dimensions::Scalar {
                 return Err(fail(si, format!("input accessor {} must be float SCALAR times", input.index())));
             }
-            let times = read(&input).map_err(|f| fail(si, format!("input accessor {}: {f:?}", input.index())))?;
-            if times.is_empty() {
+            if input.count() == 0 {
                 return Err(fail(si, format!("input accessor {} has no keys", input.index())));
             }
-            if let Some(k) = times.iter().position(|t| !t.is_finite()) {
-                return Err(fail(si, format!("key {k}'s time is {}", times[k])));
-            }
-            if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
-                return Err(fail(
-                    si,
-                    format!("key times not strictly increasing: key {} is {} after {}", k + 1, times[k + 1], times[k]),
-                ));
-            }
-            if s.interpolation() == Interpolation::CubicSpline && times.len() < 2 {
+            if s.interpolation() == Interpolation::CubicSpline && input.count() < 2 {
                 return Err(fail(si, "CUBICSPLINE needs at least two keys".into()));
-            }
-            let output = s.output();
-            let values = read(&output).map_err(|f| fail(si, format!("output accessor {}: {f:?}", output.index())))?;
-            if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-                let n = output.dimensions().multiplicity();
-                return Err(fail(si, format!("output value {} (element {}) is {}", k, k / n, values[k])));
             }
         }
         for ch in anim.channels() {
@@ -121,18 +103,12 @@ pub(crate) fn validate(doc: &Document, buffers: &[&[u8]], name: &str) -> Result<
                     acc.count()
                 )));
             }
-            let m = read(&acc).map_err(|f| fail(format!("inverseBindMatrices accessor {}: {f:?}", acc.index())))?;
-            if let Some(k) = m.iter().position(|v| !v.is_finite()) {
-                return Err(fail(format!("inverse bind matrix {} is not finite", k / 16)));
-            }
         }
     }
 
-    // Skinned meshes: joint indices inside the node's skin, one weight per vertex.
-    let mut checked: HashSet<(usize, usize)> = HashSet::new();
+    // Skinned meshes: one joint and one weight element per vertex, joints as small integers.
     for node in doc.nodes() {
         let (Some(skin), Some(mesh)) = (node.skin(), node.mesh()) else { continue };
-        let joints = skin.joints().count();
         let fail = |detail: String| SceneError::InvalidSkin { source_name: name.into(), skin: skin.index(), detail };
         for prim in mesh.primitives() {
             let vertices = prim.get(&gltf::Semantic::Positions).map_or(0, |p| p.count());
@@ -151,19 +127,11 @@ pub(crate) fn validate(doc: &Document, buffers: &[&[u8]], name: &str) -> Result<
                 if acc.count() != vertices {
                     return Err(fail(format!("{at} has {} elements for {vertices} vertices", acc.count())));
                 }
-                if !is_joints || !checked.insert((acc.index(), joints)) {
-                    continue;
-                }
-                if !matches!(acc.data_type(), DataType::U8 | DataType::U16) || acc.dimensions() != Dimensions::Vec4 {
+                if is_joints
+                    && (!matches!(acc.data_type(), DataType::U8 | DataType::U16)
+                        || acc.dimensions() != Dimensions::Vec4)
+                {
                     return Err(fail(format!("{at} must be unsigned byte or short VEC4")));
-                }
-                let idx = read(&acc).map_err(|f| fail(format!("{at}: {f:?}")))?;
-                if let Some(k) = idx.iter().position(|&j| j as usize >= joints) {
-                    return Err(fail(format!(
-                        "{at}: vertex {} uses joint {}, the skin has {joints} joints",
-                        k / 4,
-                        idx[k]
-                    )));
                 }
             }
         }
@@ -187,19 +155,15 @@ pub(crate) fn validate(doc: &Document, buffers: &[&[u8]], name: &str) -> Result<
             }
             let vertices = prim.get(&gltf::Semantic::Positions).map_or(0, |p| p.count());
             for (k, t) in prim.morph_targets().enumerate() {
-                if let Some(acc) = t.positions() {
-                    if acc.count() != vertices || acc.dimensions() != Dimensions::Vec3 {
-                        return Err(fail(format!(
-                            "target {k}'s POSITION accessor {} has {} {:?} elements for {vertices} vertices",
-                            acc.index(),
-                            acc.count(),
-                            acc.dimensions()
-                        )));
-                    }
-                    let d = read(&acc).map_err(|f| fail(format!("target {k}: {f:?}")))?;
-                    if let Some(i) = d.iter().position(|v| !v.is_finite()) {
-                        return Err(fail(format!("target {k}: vertex {} delta is not finite", i / 3)));
-                    }
+                if let Some(acc) = t.positions()
+                    && (acc.count() != vertices || acc.dimensions() != Dimensions::Vec3)
+                {
+                    return Err(fail(format!(
+                        "target {k}'s POSITION accessor {} has {} {:?} elements for {vertices} vertices",
+                        acc.index(),
+                        acc.count(),
+                        acc.dimensions()
+                    )));
                 }
             }
         }
@@ -233,6 +197,6 @@ pub(crate) fn validate(doc: &Document, buffers: &[&[u8]], name: &str) -> Result<
 }
 
 /// Morph targets of a mesh (those of its first primitive; all must agree).
-fn mesh_targets(mesh: &gltf::Mesh) -> usize {
+pub(crate) fn mesh_targets(mesh: &gltf::Mesh) -> usize {
     mesh.primitives().next().map_or(0, |p| p.morph_targets().count())
 }

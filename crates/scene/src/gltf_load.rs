@@ -18,8 +18,8 @@
 //! Before a buffer is read, [`crate::gltf_file`] checks the container, the JSON and the buffer
 //! URIs, and [`crate::load_budget`] counts what the document would allocate (instancing through
 //! the node graph included) against [`LoadLimits`]. Accessors are read with explicit bounds
-//! checks ([`crate::accessor`]) and animation and skin data are validated
-//! ([`crate::animation_data`]), so every malformed file gets a [`SceneError`] naming the node,
+//! checks ([`crate::accessor`]); the shape of animation and skin data is validated
+//! ([`crate::animation_data`]) and their values where the rig decodes them ([`crate::pose`]), so every malformed file gets a [`SceneError`] naming the node,
 //! mesh, primitive or accessor at fault instead of a panic, an abort or a hang.
 
 use std::path::Path;
@@ -103,7 +103,7 @@ pub fn load_rigged_slice_with(
     precheck_external_buffers(&doc, base_dir, &name)?;
     let buffers = gltf::import_buffers(&doc, base_dir, gltf.blob).map_err(|e| map_gltf_error(e, &name))?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|d| &d.0[..]).collect();
-    crate::animation_data::validate(&doc, &buffers, &name)?;
+    crate::animation_data::validate(&doc, &name)?;
     Loader { name, doc: &doc, buffers: &buffers }.load(&roots, plan)
 }
 
@@ -128,6 +128,16 @@ struct Loader<'a> {
     name: String,
     doc: &'a gltf::Document,
     buffers: &'a [&'a [u8]],
+}
+
+/// What the depth-first walk of the scene carries: the decoded meshes, which subtrees to
+/// enter, the index list being written, the current path (cycle and depth checks) and the rig.
+struct SceneWalk<'w, 'r> {
+    meshes: &'w [Vec<Option<LocalPrimitive>>],
+    visit_below: &'w [bool],
+    out: &'w mut Mesh,
+    path: Vec<usize>,
+    rig: &'w mut RigBuilder<'r>,
 }
 
 /// One primitive's triangles, decoded once per (mesh, primitive) so that a mesh used by many
@@ -168,11 +178,17 @@ impl Loader<'_> {
         };
         out.positions.try_reserve_exact(plan.vertices as usize).map_err(|e| reserve("vertices", e))?;
         out.indices.try_reserve_exact(plan.triangles as usize).map_err(|e| reserve("triangles", e))?;
-        let mut path = Vec::new();
         let nodes: Vec<gltf::Node> = self.doc.nodes().collect();
+        let mut walk = SceneWalk {
+            meshes: &meshes,
+            visit_below: &plan.visit_below,
+            out: &mut out,
+            path: Vec::new(),
+            rig: &mut rig,
+        };
         for &root in roots {
             if plan.visit_below[root] {
-                self.visit(&nodes[root], None, &meshes, &plan.visit_below, &mut out, &mut path, &mut rig)?;
+                self.visit(&nodes[root], None, &mut walk)?;
             }
         }
         let rig = rig.finish()?;
@@ -195,17 +211,10 @@ impl Loader<'_> {
         Ok(Loaded { mesh: out, rig, report })
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn visit(
-        &self,
-        node: &gltf::Node,
-        parent: Option<u32>,
-        meshes: &[Vec<Option<LocalPrimitive>>],
-        visit_below: &[bool],
-        out: &mut Mesh,
-        path: &mut Vec<usize>,
-        rig: &mut RigBuilder,
-    ) -> Result<(), SceneError> {
+    /// Visits `node` under the visit `parent`: its mesh's primitives become instances (and
+    /// triangles, in order), then its children that lead to a mesh or a joint.
+    fn visit(&self, node: &gltf::Node, parent: Option<u32>, walk: &mut SceneWalk) -> Result<(), SceneError> {
+        let SceneWalk { meshes, visit_below, out, path, rig } = walk;
         let idx = node.index();
         if path.contains(&idx) {
             return Err(SceneError::InvalidNode {
@@ -239,9 +248,9 @@ impl Loader<'_> {
         }
         path.push(idx);
         for child in node.children().filter(|c| visit_below[c.index()]) {
-            self.visit(&child, Some(visit), meshes, visit_below, out, path, rig)?;
+            self.visit(&child, Some(visit), walk)?;
         }
-        path.pop();
+        walk.path.pop();
         Ok(())
     }
 

@@ -72,7 +72,9 @@ impl Mesh {
     /// All triangles as corner triples, in triangle order: the form the grid and the
     /// intersection code work on (no index indirection on the hot path).
     pub fn triangles(&self) -> Vec<[Vec3; 3]> {
-        (0..self.indices.len()).map(|i| self.triangle(i)).collect()
+        let mut out = Vec::with_capacity(self.indices.len());
+        self.triangles_into(&mut out);
+        out
     }
 
     /// [`Mesh::triangles`] into a reused buffer (animation frames).

@@ -8,14 +8,12 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use gridrt_gpu::{GpuSession, RenderOptions};
-use gridrt_grid::Traversal;
-use gridrt_grid::trace::TraceOptions;
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::build_grid;
 use crate::cli::{AnimateArgs, AnimateBackend};
-use crate::lab::animation::{Player, camera, shadow_rays};
+use crate::lab::animation::{FixedView, Player, shadow_rays};
 use crate::lab::report::{Chart, Series, progress, save_chart, write_rows};
 
 /// One frame of the timeline.
@@ -72,10 +70,8 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let cfg = args.grid.config()?;
     let (width, height) = args.size;
     let bounds = player.clip_bounds(16)?;
-    let opts = RenderOptions::new(camera(&bounds, width, height), width, height);
-    let shade = gridrt_gpu::render::shade_params(&bounds, &opts);
-    let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&opts.camera, width, height));
-    let trace_opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let view = FixedView::new(&bounds, width, height);
+    let (opts, shade, primary, trace_opts) = (view.opts, &view.shade, &view.primary, view.trace_options());
     let ctx = match args.backend {
         AnimateBackend::Gpu => Some(super::gpu_context()?),
         AnimateBackend::Cpu => None,
@@ -101,24 +97,25 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         let (grid, _) = build_grid(&player.tris, &cfg)?;
         let built = Instant::now();
         let tris = &player.tris;
-        let (primary_hits, shadowed, rgba) = match &ctx {
+        // Hits, shadowed rays, the end of tracing, and the image when it is wanted (the CPU
+        // shades after the timing).
+        let (primary_hits, shadowed, traced, rgba) = match &ctx {
             None => {
-                let (hits, st) = grid.trace_batch(tris, &primary, trace_opts, true);
-                shadow_rays(&shade, &primary, &hits, &mut shadow);
+                let (hits, st) = grid.trace_batch(tris, primary, trace_opts, true);
+                shadow_rays(shade, primary, &hits, &mut shadow);
                 let (shadow_hits, sst) = grid.trace_batch(tris, &shadow, trace_opts, true);
                 let traced = Instant::now();
-                let rgba = args.frames_dir.as_ref().map(|_| cpu_pixels(tris, &shade, &primary, &hits, &shadow_hits));
-                (st.hits, Some(sst.hits), (traced, rgba))
+                let rgba = args.frames_dir.as_ref().map(|_| cpu_pixels(tris, shade, primary, &hits, &shadow_hits));
+                (st.hits, Some(sst.hits), traced, rgba)
             }
             Some(ctx) => {
                 let gpu = GpuSession::new(ctx, tris, bounds)?;
                 let frame = gpu.render(&gpu.upload(&grid)?, &opts)?;
                 let traced = Instant::now();
                 let hits = frame.hits.iter().filter(|h| h.is_hit()).count() as u64;
-                (hits, None, (traced, Some(frame.rgba)))
+                (hits, None, traced, Some(frame.rgba))
             }
         };
-        let (traced, rgba) = rgba;
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         rows.push(FrameRow {
             frame: k,
@@ -196,13 +193,9 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         println!("frames: {}", dir.join("frame_NNNNN.png").display());
     }
     if let Some(out) = &args.out {
-        print_written(out);
+        println!("timeline: {}", out.join("timeline.{csv,json,svg,png}").display());
     }
     Ok(())
-}
-
-fn print_written(out: &Path) {
-    println!("timeline: {}", out.join("timeline.{csv,json,svg,png}").display());
 }
 
 /// The shaded image from CPU hits (the CPU port of shade.wgsl), for PNG frames.

@@ -1,10 +1,13 @@
 //! A scene playing an animation, for `gridrt animate` and `gridrt bench --dynamic`: the rig,
 //! the posed mesh and its triangle soup (buffers reused frame to frame), the clip's looped
-//! time line, a camera and light fixed over the whole clip, and the CPU shadow rays.
+//! time line, a view (camera, light, primary rays) fixed over the whole clip, and the CPU
+//! shadow rays.
 
 use glam::Vec3;
+use gridrt_gpu::RenderOptions;
 use gridrt_gpu::layout::ShadeParams;
-use gridrt_scene::{Aabb, Camera, ClipTime, Hit, Loaded, Mesh, PoseScratch, Ray, Rig};
+use gridrt_grid::trace::TraceOptions;
+use gridrt_scene::{Aabb, ClipTime, Hit, Loaded, Mesh, PoseScratch, Ray, Rig};
 use rayon::prelude::*;
 
 /// A loaded scene posed frame by frame.
@@ -53,9 +56,27 @@ impl Player {
     }
 }
 
-/// The camera that frames `bounds` at `width` × `height`.
-pub fn camera(bounds: &Aabb, width: u32, height: u32) -> Camera {
-    Camera::fit(bounds, width as f32 / height as f32)
+/// What every frame of a clip is seen with: the shaded render's options (camera framing the
+/// clip's bounds), its light and shading constants, and its primary rays.
+#[derive(Debug)]
+pub struct FixedView {
+    pub opts: RenderOptions,
+    pub shade: ShadeParams,
+    pub primary: Vec<Ray>,
+}
+
+impl FixedView {
+    pub fn new(bounds: &Aabb, width: u32, height: u32) -> FixedView {
+        let opts = RenderOptions::fit(bounds, width, height);
+        let shade = gridrt_gpu::render::shade_params(bounds, &opts);
+        let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&opts.camera, width, height));
+        FixedView { opts, shade, primary }
+    }
+
+    /// The render's traversal and mailbox, for CPU traces of the same frame.
+    pub fn trace_options(&self) -> TraceOptions {
+        TraceOptions { traversal: self.opts.traversal, mailbox: self.opts.mailbox }
+    }
 }
 
 /// shaders/shadow.wgsl's shadow rays (the CPU port), for every primary ray, in parallel.

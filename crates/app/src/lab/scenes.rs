@@ -26,6 +26,19 @@ pub fn default_scenes() -> Option<PathBuf> {
         .find(|p| p.join("manifest.json").is_file())
 }
 
+/// The .glb/.gltf files directly in `dir`, sorted by path.
+pub fn gltf_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let path = entry?.path();
+        if path.extension().is_some_and(|e| e == "glb" || e == "gltf") {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
 pub fn from_manifest(dir: &Path, quick: bool) -> anyhow::Result<Vec<LabScene>> {
     let text = std::fs::read_to_string(dir.join("manifest.json"))
         .with_context(|| format!("reading {}/manifest.json", dir.display()))?;

@@ -1,15 +1,18 @@
 //! Builds a [`Rig`] while the loader walks the document: node rest transforms, the visits and
 //! instances in triangle order, each primitive's morph deltas and joint influences, then the
-//! skins and clips. The data were validated by [`crate::animation_data`] and counted by
-//! [`crate::load_budget`]; what is checked here is what only the walk can see (a skinned
-//! primitive without influences, a joint outside the scene whose ancestry does not end).
+//! skins and clips. Their shape was validated by [`crate::animation_data`] and their counts by
+//! [`crate::load_budget`]; the values are checked here, where each is decoded once (times
+//! finite and strictly increasing, finite outputs, inverse bind matrices and morph deltas,
+//! joint indices inside every skin that uses the mesh), as is what only the walk can see (a
+//! skinned primitive without influences, a joint outside the scene whose ancestry does not end).
 
 use glam::{DMat4, DQuat, Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::animation::Property;
 
 use super::{Channel, Clip, Influences, Instance, NodeRest, Primitive, Rig, Skin, Target, Trs, Visit};
-use crate::accessor::read_components;
+use crate::accessor::{AccessorFault, read_components};
+use crate::animation_data::mesh_targets;
 use crate::error::{PrimitiveRef, SceneError};
 use crate::gltf_load::MAX_NODE_DEPTH;
 use crate::pose::sampler::Sampler;
@@ -27,9 +30,11 @@ pub(crate) struct RigBuilder<'a> {
     primitives: Vec<Primitive>,
     instances: Vec<Instance>,
     vertex_count: usize,
-    /// Per node, its skin when it has a mesh too; per mesh, the first skin applied to it.
+    /// Per node, its skin when it has a mesh too.
     node_skin: Vec<Option<u32>>,
-    mesh_skin: Vec<Option<usize>>,
+    /// Per skinned mesh, the skin with the fewest joints among those applied to it, and a node
+    /// applying it: (joints, skin, node).
+    mesh_skin: Vec<Option<(usize, usize, usize)>>,
 }
 
 impl<'a> RigBuilder<'a> {
@@ -53,7 +58,11 @@ impl<'a> RigBuilder<'a> {
         for n in doc.nodes() {
             if let (Some(skin), Some(mesh)) = (n.skin(), n.mesh()) {
                 node_skin[n.index()] = Some(skin.index() as u32);
-                mesh_skin[mesh.index()].get_or_insert(skin.index());
+                let this = (skin.joints().count(), skin.index(), n.index());
+                let least: &mut Option<(usize, usize, usize)> = &mut mesh_skin[mesh.index()];
+                if least.is_none_or(|l| this.0 < l.0) {
+                    *least = Some(this);
+                }
             }
         }
         RigBuilder {
@@ -110,8 +119,8 @@ impl<'a> RigBuilder<'a> {
         first as u32
     }
 
-    fn read(&self, acc: &gltf::Accessor) -> Result<Vec<f64>, String> {
-        read_components(self.buffers, acc).map_err(|f| format!("accessor {}: {f:?}", acc.index()))
+    fn read(&self, acc: &gltf::Accessor) -> Result<Vec<f64>, AccessorFault> {
+        read_components(self.buffers, acc)
     }
 
     fn read_targets(&self, prim: &gltf::Primitive, at: &PrimitiveRef) -> Result<Vec<Vec<Vec3>>, SceneError> {
@@ -120,12 +129,13 @@ impl<'a> RigBuilder<'a> {
         let mut out = Vec::new();
         for (k, t) in prim.morph_targets().enumerate() {
             out.push(match t.positions() {
-                Some(acc) => self
-                    .read(&acc)
-                    .map_err(|e| fail(format!("target {k}: {e}")))?
-                    .chunks_exact(3)
-                    .map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32))
-                    .collect(),
+                Some(acc) => {
+                    let d = self.read(&acc).map_err(|f| fail(format!("target {k}: {f:?}")))?;
+                    if let Some(i) = d.iter().position(|v| !v.is_finite()) {
+                        return Err(fail(format!("target {k}: vertex {} delta is not finite", i / 3)));
+                    }
+                    d.chunks_exact(3).map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
+                }
                 None => Vec::new(),
             });
         }
@@ -134,18 +144,15 @@ impl<'a> RigBuilder<'a> {
 
     /// JOINTS_n / WEIGHTS_n sets, in pairs.
     fn read_influences(&self, prim: &gltf::Primitive, at: &PrimitiveRef) -> Result<Influences, SceneError> {
-        let fail = |detail: String| SceneError::InvalidSkin {
-            source_name: self.name.clone(),
-            skin: self.mesh_skin[at.mesh].unwrap_or_default(),
-            detail: format!("{at}: {detail}"),
-        };
+        let (limit, skin, node) = self.mesh_skin[at.mesh].expect("only skinned meshes read influences");
+        let fail = |detail: String| SceneError::InvalidSkin { source_name: self.name.clone(), skin, detail };
         let vertices = prim.get(&gltf::Semantic::Positions).map_or(0, |p| p.count());
         let mut sets = 0;
         while prim.get(&gltf::Semantic::Joints(sets)).is_some() || prim.get(&gltf::Semantic::Weights(sets)).is_some() {
             sets += 1;
         }
         if sets == 0 {
-            return Err(fail("is skinned but has no JOINTS_0 / WEIGHTS_0".into()));
+            return Err(fail(format!("{at}: is skinned but has no JOINTS_0 / WEIGHTS_0")));
         }
         let per_vertex = 4 * sets as usize;
         let mut joints = vec![0u16; vertices * per_vertex];
@@ -153,21 +160,35 @@ impl<'a> RigBuilder<'a> {
         for set in 0..sets {
             let (Some(j), Some(w)) = (prim.get(&gltf::Semantic::Joints(set)), prim.get(&gltf::Semantic::Weights(set)))
             else {
-                return Err(fail(format!("JOINTS_{set} and WEIGHTS_{set} must come in pairs")));
+                return Err(fail(format!("{at}: JOINTS_{set} and WEIGHTS_{set} must come in pairs")));
             };
             let weight_type_ok = match w.data_type() {
                 DataType::F32 => true,
                 DataType::U8 | DataType::U16 => w.normalized(),
                 _ => false,
             };
-            if !weight_type_ok || w.dimensions() != Dimensions::Vec4 || w.count() != vertices {
+            // Element counts were checked with the shape (animation_data).
+            if !weight_type_ok || w.dimensions() != Dimensions::Vec4 {
                 return Err(fail(format!(
-                    "WEIGHTS_{set} accessor {} must be float or normalized unsigned byte/short VEC4 with {vertices} elements",
+                    "{at}: WEIGHTS_{set} accessor {} must be float or normalized unsigned byte/short VEC4",
                     w.index()
                 )));
             }
-            let jv = self.read(&j).map_err(|e| fail(format!("JOINTS_{set}: {e}")))?;
-            let wv = self.read(&w).map_err(|e| fail(format!("WEIGHTS_{set}: {e}")))?;
+            let joints_at = format!(
+                "node {node}, mesh {} primitive {}, Joints({set}) accessor {}",
+                at.mesh,
+                at.primitive,
+                j.index()
+            );
+            let jv = self.read(&j).map_err(|f| fail(format!("{joints_at}: {f:?}")))?;
+            if let Some(k) = jv.iter().position(|&x| x as usize >= limit) {
+                return Err(fail(format!(
+                    "{joints_at}: vertex {} uses joint {}, the skin has {limit} joints",
+                    k / 4,
+                    jv[k]
+                )));
+            }
+            let wv = self.read(&w).map_err(|f| fail(format!("{at}: WEIGHTS_{set} accessor {}: {f:?}", w.index())))?;
             for v in 0..vertices {
                 for c in 0..4 {
                     joints[v * per_vertex + set as usize * 4 + c] = jv[v * 4 + c] as u16;
@@ -197,11 +218,17 @@ impl<'a> RigBuilder<'a> {
             }
             let inverse_bind = match skin.inverse_bind_matrices() {
                 Some(acc) => {
-                    let m = self.read(&acc).map_err(|e| SceneError::InvalidSkin {
+                    let fail = |detail: String| SceneError::InvalidSkin {
                         source_name: self.name.clone(),
                         skin: skin.index(),
-                        detail: e,
-                    })?;
+                        detail,
+                    };
+                    let m = self
+                        .read(&acc)
+                        .map_err(|f| fail(format!("inverseBindMatrices accessor {}: {f:?}", acc.index())))?;
+                    if let Some(k) = m.iter().position(|v| !v.is_finite()) {
+                        return Err(fail(format!("inverse bind matrix {} is not finite", k / 16)));
+                    }
                     m.chunks_exact(16).take(joints.len()).map(DMat4::from_cols_slice).collect()
                 }
                 None => vec![DMat4::IDENTITY; joints.len()],
@@ -214,7 +241,7 @@ impl<'a> RigBuilder<'a> {
         let mut weight_start = vec![0];
         let mut rest_weights = Vec::new();
         for n in doc.nodes() {
-            let targets = n.mesh().and_then(|m| m.primitives().next()).map_or(0, |p| p.morph_targets().count());
+            let targets = n.mesh().map_or(0, |m| mesh_targets(&m));
             let given = n.weights().or_else(|| n.mesh().and_then(|m| m.weights()));
             match given {
                 Some(w) if w.len() == targets => rest_weights.extend(w.iter().map(|&x| x as f64)),
@@ -276,15 +303,31 @@ impl<'a> RigBuilder<'a> {
         };
         let mut samplers = Vec::new();
         for s in anim.samplers() {
-            let times = self.read(&s.input()).map_err(|e| fail(s.index(), e))?;
-            let values = self.read(&s.output()).map_err(|e| fail(s.index(), e))?;
+            let si = s.index();
+            let (input, output) = (s.input(), s.output());
+            let times = self.read(&input).map_err(|f| fail(si, format!("input accessor {}: {f:?}", input.index())))?;
+            if let Some(k) = times.iter().position(|t| !t.is_finite()) {
+                return Err(fail(si, format!("key {k}'s time is {}", times[k])));
+            }
+            if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
+                return Err(fail(
+                    si,
+                    format!("key times not strictly increasing: key {} is {} after {}", k + 1, times[k + 1], times[k]),
+                ));
+            }
+            let values =
+                self.read(&output).map_err(|f| fail(si, format!("output accessor {}: {f:?}", output.index())))?;
+            if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+                let n = output.dimensions().multiplicity();
+                return Err(fail(si, format!("output value {} (element {}) is {}", k, k / n, values[k])));
+            }
             let per_key = if s.interpolation() == gltf::animation::Interpolation::CubicSpline { 3 } else { 1 };
             // Validated: values = keys × per_key × width.
             let width = values.len() / (times.len() * per_key).max(1);
             samplers.push(Sampler { interpolation: s.interpolation().into(), times, values, width });
         }
         let mut channels = Vec::new();
-        let mut moved = Vec::new();
+        let (mut moved, mut is_moved) = (Vec::new(), vec![false; self.nodes.len()]);
         for ch in anim.channels() {
             let node = ch.target().node().index() as u32;
             let target = match ch.target().property() {
@@ -293,7 +336,7 @@ impl<'a> RigBuilder<'a> {
                 Property::Scale => Target::Scale,
                 Property::MorphTargetWeights => Target::Weights,
             };
-            if target != Target::Weights && !moved.contains(&node) {
+            if target != Target::Weights && !std::mem::replace(&mut is_moved[node as usize], true) {
                 moved.push(node);
             }
             channels.push(Channel { node, target, sampler: ch.sampler().index() as u32 });

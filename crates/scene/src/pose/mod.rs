@@ -26,7 +26,6 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 pub(crate) use build::RigBuilder;
-pub use sampler::Interpolation;
 
 use crate::error::{PrimitiveRef, SceneError};
 use crate::gltf_load::MAX_COORDINATE;
@@ -226,11 +225,6 @@ impl Rig {
         &self.clips
     }
 
-    /// True when some clip moves something (a file with clips of no channels is static).
-    pub fn is_animated(&self) -> bool {
-        self.clips.iter().any(|c| !c.channels.is_empty())
-    }
-
     /// The clip named by `key`: an index (`0`, `1`, …) or a name.
     pub fn find_clip(&self, key: &str) -> Result<usize, SceneError> {
         if let Ok(i) = key.trim().parse::<usize>()
@@ -270,11 +264,6 @@ impl Rig {
         (!s.clips.is_empty() || s.skins > 0 || s.morph_targets > 0).then_some(s)
     }
 
-    /// Number of vertices a pose writes (the loaded mesh's `positions.len()`).
-    pub fn vertex_count(&self) -> usize {
-        self.vertex_count
-    }
-
     pub fn summary(&self) -> AnimationSummary {
         let mut seen = std::collections::HashSet::new();
         let morph_targets = self.primitives.iter().filter(|p| seen.insert(p.at.mesh)).map(|p| p.targets.len()).sum();
@@ -303,7 +292,7 @@ impl Rig {
     }
 
     /// Writes the world-space positions at `time` (`None`: the rest pose) into `positions`,
-    /// resized to [`Rig::vertex_count`]. The index list is the loader's and never changes.
+    /// resized to the loaded mesh's vertex count. The index list is the loader's and never changes.
     /// Errors when a posed vertex is not finite or beyond [`MAX_COORDINATE`].
     pub fn pose(
         &self,

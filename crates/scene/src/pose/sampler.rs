@@ -8,7 +8,7 @@ use glam::DQuat;
 
 /// How a sampler interpolates between its keys.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Interpolation {
+pub(crate) enum Interpolation {
     Step,
     Linear,
     CubicSpline,

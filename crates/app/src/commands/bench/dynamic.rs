@@ -10,15 +10,15 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{CostModel, GridConfig, GridKind, Traversal, structure};
+use gridrt_grid::{CostModel, GridConfig, GridKind, structure};
 use gridrt_scene::{Hit, LoadLimits, Ray};
 use serde::Serialize;
 
 use super::agree;
 use crate::cli::BenchArgs;
-use crate::lab::animation::{Player, camera, shadow_rays};
+use crate::lab::animation::{FixedView, Player, shadow_rays};
 use crate::lab::report::{print_table, progress, write_rows};
-use crate::lab::scenes::default_scenes;
+use crate::lab::scenes::{default_scenes, gltf_files};
 
 /// Image size of the dynamic frames.
 const SIZE: u32 = 512;
@@ -82,6 +82,14 @@ impl Strategy {
         v
     }
 
+    /// A tree built once and refit every frame (its first build is its setup).
+    fn refit(self) -> bool {
+        #[cfg(feature = "peers")]
+        return self == Strategy::Refit;
+        #[cfg(not(feature = "peers"))]
+        false
+    }
+
     fn name(self) -> String {
         match self {
             Strategy::Grid(k) => k.name().into(),
@@ -101,11 +109,9 @@ enum Built {
 }
 
 impl Built {
-    fn trace(&self, tris: &[[glam::Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
+    fn trace(&self, tris: &[[glam::Vec3; 3]], rays: &[Ray], opts: TraceOptions) -> Vec<Hit> {
         match self {
-            Built::Grid(g) => {
-                g.trace_batch(tris, rays, TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true }, true).0
-            }
+            Built::Grid(g) => g.trace_batch(tris, rays, opts, true).0,
             #[cfg(feature = "peers")]
             Built::Peer(p) => p.trace_batch(tris, rays),
         }
@@ -116,12 +122,7 @@ impl Built {
 /// generated crowd is added by the caller.
 fn scene_files(args: &BenchArgs) -> Vec<PathBuf> {
     let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
-    let mut files: Vec<PathBuf> = dir
-        .and_then(|d| std::fs::read_dir(d.join("animated")).ok())
-        .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
-        .unwrap_or_default();
-    files.retain(|p| p.extension().is_some_and(|e| e == "glb" || e == "gltf"));
-    files.sort();
+    let mut files = dir.and_then(|d| gltf_files(&d.join("animated")).ok()).unwrap_or_default();
     if args.quick {
         files.retain(|p| p.file_name().is_some_and(|f| f == "LittlestTokyo.glb" || f == "Fox.glb"));
     }
@@ -202,13 +203,18 @@ fn bench_scene(
     anyhow::ensure!(!loaded.rig.clips().is_empty(), "{name}: no animation");
     let mut player = Player::new(loaded, 0);
     let clip = player.rig.clips()[0].clone();
-    let bounds = player.clip_bounds(16)?;
-    let opts = gridrt_gpu::RenderOptions::new(camera(&bounds, SIZE, SIZE), SIZE, SIZE);
-    let shade = gridrt_gpu::render::shade_params(&bounds, &opts);
-    let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&opts.camera, SIZE, SIZE));
+    let view = FixedView::new(&player.clip_bounds(16)?, SIZE, SIZE);
+    let (primary, trace_opts) = (&view.primary, view.trace_options());
     let mut shadow = Vec::new();
-    // Per strategy: sums of setup, build, trace ms and mismatches; and the refit tree.
-    let mut sums = vec![(0.0f64, 0.0f64, 0.0f64, 0u64); strategies.len()];
+    // Per strategy, summed over the frames; and the refit tree between frames.
+    #[derive(Clone, Copy, Default)]
+    struct Totals {
+        setup_ms: f64,
+        build_ms: f64,
+        trace_ms: f64,
+        mismatches: u64,
+    }
+    let mut sums = vec![Totals::default(); strategies.len()];
     #[cfg(feature = "peers")]
     let mut refit_tree: Option<super::peers::PeerBvh> = None;
     let mut pose_ms = 0.0;
@@ -221,8 +227,8 @@ fn bench_scene(
         let tris = &player.tris;
         let mut reference: Option<(Vec<Hit>, Vec<Hit>)> = None;
         for (s, &strategy) in strategies.iter().enumerate() {
-            // The refit tree's first build is its setup, not a frame's build.
-            let mut setup_frame = false;
+            // The refit tree is built on the first frame: its setup, not a frame's build.
+            let setup_frame = strategy.refit() && k == 0;
             let start = Instant::now();
             let built = match strategy {
                 Strategy::Grid(kind) => {
@@ -236,31 +242,32 @@ fn bench_scene(
                         tree.refit(tris);
                         tree
                     }
-                    None => {
-                        setup_frame = true;
-                        super::peers::build(super::peers::PeerKind::ObvhsMedium, tris)
-                    }
+                    None => super::peers::build(super::peers::PeerKind::ObvhsMedium, tris),
                 }),
             };
             let built_at = Instant::now();
-            let hits = built.trace(tris, &primary);
+            let hits = built.trace(tris, primary, trace_opts);
             if reference.is_none() {
-                shadow_rays(&shade, &primary, &hits, &mut shadow);
+                shadow_rays(&view.shade, primary, &hits, &mut shadow);
             }
-            let shadow_hits = built.trace(tris, &shadow);
+            let shadow_hits = built.trace(tris, &shadow, trace_opts);
             let traced = Instant::now();
-            let (reference_primary, reference_shadow) =
-                reference.get_or_insert_with(|| (hits.clone(), shadow_hits.clone()));
-            let bad = hits.iter().zip(reference_primary.iter()).filter(|(a, b)| !agree(a, b)).count()
-                + shadow_hits.iter().zip(reference_shadow.iter()).filter(|(a, b)| !agree(a, b)).count();
+            let sum = &mut sums[s];
             let build_ms = (built_at - start).as_secs_f64() * 1e3;
             if setup_frame {
-                sums[s].0 += build_ms;
+                sum.setup_ms += build_ms;
             } else {
-                sums[s].1 += build_ms;
+                sum.build_ms += build_ms;
             }
-            sums[s].2 += (traced - built_at).as_secs_f64() * 1e3;
-            sums[s].3 += bad as u64;
+            sum.trace_ms += (traced - built_at).as_secs_f64() * 1e3;
+            // The first strategy (the flat grid) is the reference of the others.
+            match &reference {
+                Some((rp, rs)) => {
+                    let differ = |a: &[Hit], b: &[Hit]| a.iter().zip(b).filter(|(x, y)| !agree(x, y)).count() as u64;
+                    sum.mismatches += differ(&hits, rp) + differ(&shadow_hits, rs);
+                }
+                None => reference = Some((hits, shadow_hits)),
+            }
             #[cfg(feature = "peers")]
             if let (Strategy::Refit, Built::Peer(tree)) = (strategy, built) {
                 refit_tree = Some(tree);
@@ -272,12 +279,10 @@ fn bench_scene(
     Ok(strategies
         .iter()
         .zip(&sums)
-        .map(|(&strategy, &(setup, build, trace, bad))| {
+        .map(|(&strategy, t)| {
             let grid = matches!(strategy, Strategy::Grid(_));
-            #[cfg(feature = "peers")]
-            let refit = strategy == Strategy::Refit;
-            #[cfg(not(feature = "peers"))]
-            let refit = false;
+            let refit = strategy.refit();
+            let Totals { setup_ms: setup, build_ms: build, trace_ms: trace, mismatches: bad } = *t;
             // A refit's first frame is its setup build: averaged over the remaining frames.
             let build_frames = if refit { (n - 1.0).max(1.0) } else { n };
             DynamicRow {

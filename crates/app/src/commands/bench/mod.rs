@@ -24,7 +24,7 @@ use serde::Serialize;
 
 use crate::cli::BenchArgs;
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use crate::lab::scenes::{LabScene, default_scenes, procedural_scenes};
+use crate::lab::scenes::{LabScene, default_scenes, gltf_files, procedural_scenes};
 use crate::lab::sweep::{best_of, machine, session};
 use crate::lab::views::{RaySet, hit_share, probe_grid, ray_sets};
 
@@ -135,12 +135,10 @@ fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<LabScene>> {
         .filter_map(|e| Some((e["file"].as_str()?.to_string(), e["kind"].as_str().unwrap_or("unknown").to_string())))
         .collect();
     if files.is_empty() {
-        for entry in std::fs::read_dir(&dir).map_err(|e| anyhow::anyhow!("reading {}: {e}", dir.display()))? {
-            let name = entry?.file_name().to_string_lossy().into_owned();
-            if name.ends_with(".glb") || name.ends_with(".gltf") {
-                files.push((name, "unknown".into()));
-            }
-        }
+        let found = gltf_files(&dir).map_err(|e| anyhow::anyhow!("reading {}: {e}", dir.display()))?;
+        files.extend(
+            found.iter().filter_map(|p| Some((p.file_name()?.to_string_lossy().into_owned(), "unknown".into()))),
+        );
     }
     files.sort();
     let mut scenes = Vec::new();
