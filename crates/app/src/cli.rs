@@ -74,6 +74,15 @@ pub struct AppArgs {
     /// (implies --open cost-model; a smoke run waits for it).
     #[arg(long)]
     pub measure: bool,
+    /// Animated scene: the clip to play, by index or name (default: the first).
+    #[arg(long)]
+    pub animation: Option<String>,
+    /// Animated scene: the clip time to start at, in seconds (default: the clip's start).
+    #[arg(long, allow_negative_numbers = true)]
+    pub time: Option<f64>,
+    /// Animated scene: start paused (it plays when it opens otherwise).
+    #[arg(long)]
+    pub paused: bool,
 }
 
 /// The app's extra windows.

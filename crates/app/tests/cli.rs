@@ -609,6 +609,46 @@ fn app_screenshots_under_xvfb() {
     assert!(timed >= 2, "{log}");
     println!("{log}");
 
+    // An animated scene plays: every shown frame posed, rebuilt and rendered; paused at two
+    // times it shows two poses; an unknown clip fails the run.
+    let crowd = tmp("app-crowd.glb");
+    ok(&["gen", "crowd", "--size", "4", "-o", s(&crowd)]);
+    let app = |args: &[&str]| {
+        let out = gridrt_cmd()
+            .arg(s(&crowd))
+            .args(args)
+            .args(["--render-scale", "0.3"])
+            .env("DISPLAY", &x.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("running the app");
+        let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        (out.status.success(), log)
+    };
+    let png = out_dir.join("app-crowd-playing.png");
+    let (good, log) = app(&["--screenshot", s(&png), "--frames", "8", "--grid", "macrocell"]);
+    assert!(good, "playing the crowd:\n{log}");
+    let shown: u64 = log
+        .split("animation: ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no animation stats in: {log}"));
+    assert!(shown >= 6, "only {shown} animation frames shown: {log}");
+    assert!(log.contains(" fps (pose "), "{log}");
+    println!("{}", log.lines().find(|l| l.contains("saved")).unwrap_or_default());
+    let paused = |t: &str| {
+        let png = out_dir.join(format!("app-crowd-{t}.png"));
+        let (good, log) = app(&["--screenshot", s(&png), "--frames", "1", "--paused", "--time", t]);
+        assert!(good && log.contains("animation: 1 frames shown"), "paused at {t}:\n{log}");
+        centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
+    };
+    let (a, b) = (paused("0.3"), paused("2.1"));
+    let differ = a.iter().zip(&b).filter(|(p, q)| p != q).count();
+    assert!(differ * 100 > a.len(), "the poses at 0.3 s and 2.1 s look the same ({differ} pixels differ)");
+    let (good, log) = app(&["--screenshot", s(&out_dir.join("app-crowd-bad.png")), "--animation", "nope"]);
+    assert!(!good && log.contains("no animation \"nope\""), "an unknown clip must fail the run:\n{log}");
+
     // A scene that does not load: the app says why and exits non-zero.
     let bad = tmp("app-bad.glb");
     std::fs::write(&bad, b"glTF\x02\x00\x00\x00 not really").unwrap();

@@ -23,6 +23,7 @@ pub use error::{RayFileError, SceneError};
 pub use gltf_load::Loaded;
 pub use load_budget::LoadLimits;
 pub use mesh::{Aabb, LoadReport, Mesh};
+pub use pose::player::Player;
 pub use pose::{AnimationSummary, Clip, ClipTime, PoseNote, PoseScratch, Rig};
 pub use ray::{Hit, NO_HIT, Ray};
 

@@ -13,8 +13,9 @@ use serde::Serialize;
 
 use super::build_grid;
 use crate::cli::{AnimateArgs, AnimateBackend};
-use crate::lab::animation::{FixedView, Player, shadow_rays};
+use crate::lab::animation::{FixedView, shadow_rays};
 use crate::lab::report::{Chart, Series, progress, save_chart, write_rows};
+use gridrt_scene::Player;
 
 /// One frame of the timeline.
 #[derive(Clone, Debug, Serialize)]

@@ -1,8 +1,11 @@
 //! A structure built for the app: [`build_structure`] (on a native thread, in the browser's
 //! build worker, or for a measurement) and the byte form the build worker hands to the page.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 use gridrt_grid::{AnyGrid, BuildReport, GridConfig, structure};
+use gridrt_scene::ClipTime;
 
 /// A structure built for one scene (by scene generation number) and configuration.
 #[derive(Debug)]
@@ -13,13 +16,23 @@ pub struct Built {
     pub report: BuildReport,
     /// Built by the browser's build worker (not on the page's or the app's thread).
     pub in_worker: bool,
+    /// The pose it was built over (`None`: the scene's rest pose).
+    pub pose: Option<Posed>,
+}
+
+/// A scene posed for one animation frame.
+#[derive(Debug)]
+pub struct Posed {
+    pub time: ClipTime,
+    pub tris: Arc<Vec<[Vec3; 3]>>,
+    pub pose_ms: f64,
 }
 
 /// Builds `config` over `tris`.
 pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation: u64) -> Result<Built, String> {
     let (grid, report) =
         structure::build(tris, config).map_err(|e| format!("building the {} grid: {e}", config.kind))?;
-    Ok(Built { scene_generation, config: *config, grid, report, in_worker: false })
+    Ok(Built { scene_generation, config: *config, grid, report, in_worker: false, pose: None })
 }
 
 /// A built structure as bytes: how the browser's build worker hands it to the page.

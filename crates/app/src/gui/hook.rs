@@ -49,6 +49,27 @@ pub struct HookStats {
     pub error: Option<String>,
     /// Milliseconds from page start to the first frame (browser clock).
     pub first_frame_ms: Option<f64>,
+    /// The timeline of an animated scene (`None`: the scene has no clips).
+    pub animation: Option<AnimationStats>,
+}
+
+/// The timeline as `stats().animation` shows it.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct AnimationStats {
+    pub clip: usize,
+    /// The timeline's clip time, and the pose on screen.
+    pub seconds: f64,
+    pub shown_seconds: Option<f64>,
+    pub playing: bool,
+    /// Animation frames shown (each one posed, rebuilt and rendered).
+    pub frames_shown: u64,
+    /// Over the last few seconds.
+    pub fps: Option<f64>,
+    /// Means over the newest frames.
+    pub pose_ms: f64,
+    pub build_ms: f64,
+    pub upload_ms: f64,
+    pub trace_ms: f64,
 }
 
 /// A command from the page.
@@ -69,6 +90,10 @@ pub enum HookCommand {
     },
     /// Dismiss the error the UI shows (as its "dismiss" button does).
     DismissError,
+    /// Play or pause the timeline.
+    Playing(bool),
+    /// Move the timeline to this clip time (seconds).
+    Seek(f64),
 }
 
 impl HookCommand {
@@ -83,6 +108,19 @@ impl HookCommand {
         match s.parse::<Traversal>()? {
             Traversal::Bresenham => Err("bresenham has no GPU walker (it misses cells); use aw, cw or liu".into()),
             t => Ok(HookCommand::Traversal(t)),
+        }
+    }
+    pub fn playing(s: &str) -> Result<HookCommand, String> {
+        match s {
+            "true" | "play" => Ok(HookCommand::Playing(true)),
+            "false" | "pause" => Ok(HookCommand::Playing(false)),
+            _ => Err(format!("{s:?}: expected play or pause")),
+        }
+    }
+    pub fn seek(s: &str) -> Result<HookCommand, String> {
+        match s.trim().parse::<f64>() {
+            Ok(t) if t.is_finite() => Ok(HookCommand::Seek(t)),
+            _ => Err(format!("{s:?}: expected a clip time in seconds")),
         }
     }
     pub fn camera(s: &str) -> Result<HookCommand, String> {
@@ -155,6 +193,10 @@ mod tests {
         assert_eq!(HookCommand::frame_size(320, 240), Ok(HookCommand::FrameSize(Some([320, 240]))));
         assert!(HookCommand::frame_size(0, 240).is_err());
         assert!(HookCommand::frame_size(1 << 20, 2).is_err());
+        assert_eq!(HookCommand::playing("pause"), Ok(HookCommand::Playing(false)));
+        assert!(HookCommand::playing("maybe").unwrap_err().contains("play or pause"));
+        assert_eq!(HookCommand::seek(" 1.5"), Ok(HookCommand::Seek(1.5)));
+        assert!(HookCommand::seek("NaN").is_err());
     }
 
     #[test]

@@ -5,26 +5,36 @@
 //! start, run on the page's thread once the browser has painted.
 
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::{Arc, Mutex};
 
 use glam::Vec3;
 use gridrt_grid::GridConfig;
 
 #[cfg(target_arch = "wasm32")]
 use super::built::decode_structure;
-use super::built::{Built, build_structure};
-use gridrt_scene::{Aabb, LoadReport};
+use super::built::{Built, Posed, build_structure};
+use gridrt_scene::{Aabb, Clip, ClipTime, LoadReport, Player};
 use web_time::Instant;
 
 /// A scene ready for building: triangles shared with build threads.
 #[derive(Debug, Clone)]
 pub struct LoadedScene {
     pub name: String,
+    /// The rest pose.
     pub tris: Arc<Vec<[Vec3; 3]>>,
+    /// The rest pose's bounds, joined with the first clip's (sampled) so that the camera and
+    /// the light frame the whole animation.
     pub bounds: Aabb,
     pub report: LoadReport,
+    /// The file's clips (empty: nothing to play).
+    pub clips: Vec<Clip>,
+    /// Poses the scene for the timeline (one posing job at a time holds it).
+    pub player: Option<Arc<Mutex<Player>>>,
 }
+
+/// Times sampled over the first clip for the animated scene's bounds.
+const CLIP_BOUNDS_SAMPLES: u32 = 16;
 
 /// Where a scene comes from.
 #[derive(Debug, Clone)]
@@ -51,24 +61,81 @@ impl SceneSource {
 
 /// Loads and validates a scene; the error is the loader's message, for the UI.
 pub fn load_scene(source: &SceneSource) -> Result<LoadedScene, String> {
-    let (mesh, report) = match source {
-        SceneSource::Default => gridrt_scene::load_default(),
-        SceneSource::Path(p) => {
-            gridrt_scene::gltf_load::load_path_with(p, &crate::limits::get()).map_err(|e| e.to_string())?
+    let loaded = match source {
+        SceneSource::Default => {
+            let (mesh, report) = gridrt_scene::load_default();
+            return Ok(LoadedScene {
+                name: source.label(),
+                tris: Arc::new(mesh.triangles()),
+                bounds: mesh.bounds(),
+                report,
+                clips: Vec::new(),
+                player: None,
+            });
         }
+        SceneSource::Path(p) => gridrt_scene::gltf_load::load_rigged_path_with(p, &crate::limits::get()),
         SceneSource::Bytes { name, bytes } => {
-            gridrt_scene::gltf_load::load_slice_with(bytes, name, None, &crate::limits::get())
-                .map_err(|e| e.to_string())?
+            gridrt_scene::gltf_load::load_rigged_slice_with(bytes, name, None, &crate::limits::get())
         }
-    };
-    if mesh.triangle_count() == 0 {
+    }
+    .map_err(|e| e.to_string())?;
+    if loaded.mesh.triangle_count() == 0 {
         return Err(format!("{}: the scene has no triangles", source.label()));
     }
     let name = match source {
         SceneSource::Path(p) => p.file_name().map_or_else(|| source.label(), |f| f.to_string_lossy().into_owned()),
         _ => source.label(),
     };
-    Ok(LoadedScene { name, tris: Arc::new(mesh.triangles()), bounds: mesh.bounds(), report })
+    let tris = Arc::new(loaded.mesh.triangles());
+    let mut bounds = loaded.mesh.bounds();
+    let report = loaded.report.clone();
+    let clips = loaded.rig.clips().to_vec();
+    let player = if clips.is_empty() {
+        None
+    } else {
+        let mut player = Player::new(loaded, 0);
+        bounds = bounds.union(&player.clip_bounds(CLIP_BOUNDS_SAMPLES).map_err(|e| e.to_string())?);
+        Some(Arc::new(Mutex::new(player)))
+    };
+    Ok(LoadedScene { name, tris, bounds, report, clips, player })
+}
+
+/// Poses `player` at `time` and builds `config` over the posed triangles, off the UI thread
+/// (natively); in the browser the pose is computed on the page and the build goes to the
+/// build worker, as for [`spawn_build`].
+pub fn spawn_pose_build(
+    ui: &eframe::egui::Context,
+    player: Arc<Mutex<Player>>,
+    time: ClipTime,
+    config: GridConfig,
+    scene_generation: u64,
+) -> Job<Result<Built, String>> {
+    let pose = move || -> Result<Posed, String> {
+        let started = Instant::now();
+        let mut p = player.lock().map_err(|_| "the posing state was poisoned by an earlier panic".to_string())?;
+        p.clip = time.clip;
+        p.pose(time.seconds).map_err(|e| e.to_string())?;
+        let tris = Arc::new(p.tris.clone());
+        Ok(Posed { time, tris, pose_ms: started.elapsed().as_secs_f64() * 1e3 })
+    };
+    #[cfg(target_arch = "wasm32")]
+    {
+        match pose() {
+            Ok(posed) => spawn_build(ui, posed.tris.clone(), config, scene_generation, Some(posed)),
+            Err(e) => {
+                let (tx, rx) = channel();
+                let _ = tx.send(Err(e));
+                Job { rx, started: Instant::now(), what: "posing".into() }
+            }
+        }
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    Job::spawn(format!("posing and building the {} grid", config.kind), ui, move || {
+        let posed = pose()?;
+        let mut built = build_structure(&posed.tris, &config, scene_generation)?;
+        built.pose = Some(posed);
+        Ok(built)
+    })
 }
 
 /// Starts building `config` for the scene of `scene_generation`: natively on a thread; in the
@@ -79,6 +146,7 @@ pub fn spawn_build(
     tris: Arc<Vec<[Vec3; 3]>>,
     config: GridConfig,
     scene_generation: u64,
+    pose: Option<Posed>,
 ) -> Job<Result<Built, String>> {
     let what = format!("building the {} grid", config.kind);
     #[cfg(target_arch = "wasm32")]
@@ -92,6 +160,7 @@ pub fn spawn_build(
                 grid,
                 report,
                 in_worker: true,
+                pose,
             });
             let _ = tx.send(built);
             wake.request_repaint();
@@ -101,7 +170,11 @@ pub fn spawn_build(
             Err(e) => log::warn!("the build worker is unavailable ({e}): building on the page's thread"),
         }
     }
-    Job::spawn(what, ui, move || build_structure(&tris, &config, scene_generation))
+    Job::spawn(what, ui, move || {
+        let mut built = build_structure(&tris, &config, scene_generation)?;
+        built.pose = pose;
+        Ok(built)
+    })
 }
 
 /// One background job and its result channel.

@@ -1,6 +1,8 @@
 //! The app's document lifecycle: a scene is loaded off the UI thread and uploaded, the
 //! structure the settings ask for is built off the UI thread and uploaded; a failure keeps the
-//! previous scene or structure on screen and is reported.
+//! previous scene or structure on screen and is reported. An animated scene is posed at the
+//! timeline's time and rebuilt with every pose; a finished frame waits until the frame on
+//! screen is complete, so every pose built is shown.
 
 use eframe::egui;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
@@ -9,6 +11,7 @@ use super::GridrtApp;
 use super::errors::ErrorKind;
 use super::jobs::{self, Job, LoadedScene, SceneSource};
 use super::orbit::Orbit;
+use super::timeline::Timeline;
 use crate::gui::built::Built;
 
 #[derive(Debug)]
@@ -22,6 +25,10 @@ pub(super) struct SceneState {
 pub(super) struct BuiltState {
     pub(super) built: Built,
     pub(super) gpu: Option<GpuStructure>,
+    /// The posed triangles on the GPU (`None`: the scene's own, the rest pose).
+    pub(super) posed_gpu: Option<GpuScene>,
+    /// Posed triangles and structure copied to the GPU, milliseconds.
+    pub(super) upload_ms: f64,
     /// Changes with every new structure (part of the render key).
     pub(super) id: u64,
 }
@@ -45,6 +52,9 @@ impl GridrtApp {
                         self.errors.report(ErrorKind::Other, e.clone());
                         self.fail_smoke(ctx, e);
                     }
+                    if let Some(e) = self.start_error.take() {
+                        self.fail_smoke(ctx, e);
+                    }
                 }
                 Err(e) => {
                     self.errors.report(ErrorKind::Other, e.clone());
@@ -56,28 +66,55 @@ impl GridrtApp {
             && let Some(r) = job.poll()
         {
             self.build_job = None;
+            let generation = self.scene.as_ref().map(|s| s.generation);
             match r.and_then(|r| r) {
-                Ok(b) if Some(b.scene_generation) == self.scene.as_ref().map(|s| s.generation) => self.set_built(b),
+                // An animation frame waits for the frame on screen to finish.
+                Ok(b) if Some(b.scene_generation) == generation && b.pose.is_some() => self.ready = Some(b),
+                Ok(b) if Some(b.scene_generation) == generation => self.set_built(b),
                 Ok(_) => {} // built for a scene that has been replaced since
+                Err(e) if self.posing => {
+                    // The pose failed: playback stops there and the error is shown.
+                    if let Some(t) = &mut self.timeline {
+                        t.playing = false;
+                        t.failed = Some(t.wanted());
+                    }
+                    self.errors.report(ErrorKind::Other, e.clone());
+                    self.fail_smoke(ctx, e);
+                }
                 Err(e) => {
                     self.errors.report(ErrorKind::Build(self.settings.grid), e.clone());
                     self.fail_smoke(ctx, e);
                 }
             }
         }
-        // Rebuild when the wanted structure differs from the built one (one build at a time;
-        // the newest settings win when it finishes).
+        if self.ready.is_some() && !self.viewport.busy() {
+            let b = self.ready.take().expect("a ready frame");
+            if Some(b.scene_generation) == self.scene.as_ref().map(|s| s.generation) {
+                self.set_built(b);
+            }
+        }
+        // Rebuild when the wanted structure (configuration and pose) differs from the built one
+        // (one build at a time; the newest settings win when it finishes).
         if self.build_job.is_none()
+            && self.ready.is_none()
             && let Some(scene) = &self.scene
         {
             let want = self.settings.grid;
-            let have = self.built.as_ref().map(|b| (b.built.scene_generation, b.built.config));
-            let failed = self.errors.build_failed(&want);
-            if have != Some((scene.generation, want)) && !failed {
+            let pose = self.timeline.as_ref().map(|t| t.wanted()).filter(|_| scene.loaded.player.is_some());
+            let have = self
+                .built
+                .as_ref()
+                .map(|b| (b.built.scene_generation, b.built.config, b.built.pose.as_ref().map(|p| p.time)));
+            let failed = self.errors.build_failed(&want)
+                || pose.is_some_and(|p| self.timeline.as_ref().and_then(|t| t.failed) == Some(p));
+            if have != Some((scene.generation, want, pose)) && !failed {
                 self.errors.clear_build();
-                let tris = scene.loaded.tris.clone();
                 let generation = scene.generation;
-                self.build_job = Some(jobs::spawn_build(ctx, tris, want, generation));
+                self.posing = pose.is_some();
+                self.build_job = Some(match (pose, &scene.loaded.player) {
+                    (Some(time), Some(player)) => jobs::spawn_pose_build(ctx, player.clone(), time, want, generation),
+                    _ => jobs::spawn_build(ctx, scene.loaded.tris.clone(), want, generation, None),
+                });
             }
         }
         if self.measure_at_start && self.last_key.is_some() && self.built.is_some() && self.build_job.is_none() {
@@ -108,29 +145,74 @@ impl GridrtApp {
             Some(cam) => Orbit::from_camera(&cam, &loaded.bounds),
             None => Orbit::fit(&loaded.bounds, aspect),
         };
+        self.timeline = self.start_timeline(&loaded);
+        self.ready = None;
         self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
         self.measurement = Default::default();
         self.errors.clear_build();
         Ok(())
     }
 
+    /// The timeline of a newly opened scene: its first clip from the start, playing, unless
+    /// the command line chose otherwise for the first animated scene. `None` without clips.
+    fn start_timeline(&mut self, loaded: &LoadedScene) -> Option<Timeline> {
+        let Some(player) = loaded.player.as_ref() else {
+            if let Some(key) = self.animation_start.clip.take() {
+                let e = format!("--animation {key}: {} has no animations", loaded.name);
+                self.errors.report(ErrorKind::Other, e.clone());
+                self.start_error = Some(e);
+            }
+            return None;
+        };
+        let start = std::mem::take(&mut self.animation_start);
+        let clip = match &start.clip {
+            Some(key) => {
+                let found = player
+                    .lock()
+                    .map_err(|_| "the posing state is poisoned".to_string())
+                    .and_then(|p| p.rig.find_clip(key).map_err(|e| e.to_string()));
+                match found {
+                    Ok(c) => c,
+                    Err(e) => {
+                        self.errors.report(ErrorKind::Other, format!("--animation: {e}"));
+                        self.start_error = Some(e);
+                        0
+                    }
+                }
+            }
+            None => 0,
+        };
+        let c = loaded.clips.get(clip)?;
+        Some(Timeline::new(clip, c.clamp(start.seconds.unwrap_or(c.start)), !start.paused))
+    }
+
     pub(super) fn set_built(&mut self, built: Built) {
         self.worker_builds += u64::from(built.in_worker);
-        let gpu = match &self.gpu {
-            Some(g) => match GpuStructure::new(&g.ctx, &built.grid).and_then(|s| g.ctx.check_device().map(|()| s)) {
-                Ok(s) => Some(s),
-                Err(e) => {
-                    // The previous structure stays on screen; this configuration is not retried.
-                    self.errors.report(
-                        ErrorKind::Build(built.config),
-                        format!("uploading the {} grid: {e} (the previous one stays)", built.config.kind),
-                    );
-                    return;
+        let started = web_time::Instant::now();
+        let uploaded = match &self.gpu {
+            Some(g) => {
+                let posed = built.pose.as_ref().map(|p| GpuScene::new(&g.ctx, &p.tris)).transpose();
+                let structure = GpuStructure::new(&g.ctx, &built.grid);
+                match (posed, structure) {
+                    (Ok(p), Ok(s)) => g.ctx.check_device().map(|()| (Some(s), p)),
+                    (Err(e), _) | (_, Err(e)) => Err(e),
                 }
-            },
-            None => None,
+            }
+            None => Ok((None, None)),
+        };
+        let (gpu, posed_gpu) = match uploaded {
+            Ok(u) => u,
+            Err(e) => {
+                // The previous structure stays on screen; this configuration is not retried.
+                self.errors.report(
+                    ErrorKind::Build(built.config),
+                    format!("uploading the {} grid: {e} (the previous one stays)", built.config.kind),
+                );
+                return;
+            }
         };
         self.built_counter += 1;
-        self.built = Some(BuiltState { built, gpu, id: self.built_counter });
+        let upload_ms = started.elapsed().as_secs_f64() * 1e3;
+        self.built = Some(BuiltState { built, gpu, posed_gpu, upload_ms, id: self.built_counter });
     }
 }

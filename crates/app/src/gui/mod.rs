@@ -19,6 +19,7 @@ pub mod orbit;
 pub mod panels;
 pub mod settings;
 mod smoke;
+pub mod timeline;
 pub mod viewport;
 #[cfg(target_arch = "wasm32")]
 pub mod web;
@@ -39,6 +40,7 @@ use lifecycle::{BuiltState, SceneState};
 use orbit::Orbit;
 use settings::Settings;
 use smoke::Smoke;
+use timeline::{FrameTimes, Timeline};
 use viewport::{Gpu, Viewport};
 
 /// How a smoke run (`--screenshot`) ended: `Ok(message)` or `Err(reason)`.
@@ -98,6 +100,26 @@ pub struct GridrtApp {
     worker_builds: u64,
     #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     started: Instant,
+    /// The animated scene's timeline (`None`: the scene has no clips).
+    timeline: Option<Timeline>,
+    /// How the first animated scene starts (`--animation`, `--time`, `--paused`).
+    animation_start: AnimationStart,
+    /// An animation frame built while the previous one was still rendering.
+    ready: Option<built::Built>,
+    /// The build job running poses the scene.
+    posing: bool,
+    /// The structure whose frame the timeline recorded last.
+    recorded: u64,
+    /// `--animation` named no clip of the scene (a smoke run fails with it).
+    start_error: Option<String>,
+}
+
+/// How an animated scene starts playing.
+#[derive(Clone, Debug, Default)]
+struct AnimationStart {
+    clip: Option<String>,
+    seconds: Option<f64>,
+    paused: bool,
 }
 
 /// While the camera moves, frames slower than this are rendered at a lower resolution; the
@@ -196,6 +218,12 @@ impl GridrtApp {
             first_frame_ms: None,
             worker_builds: 0,
             started: Instant::now(),
+            timeline: None,
+            animation_start: AnimationStart { clip: args.animation.clone(), seconds: args.time, paused: args.paused },
+            ready: None,
+            posing: false,
+            recorded: 0,
+            start_error: None,
         };
         app.hook.lock().expect("hook lock").repaint = Some(cc.egui_ctx.clone());
         let source = args.scene.map_or(SceneSource::Default, SceneSource::Path);
@@ -265,7 +293,7 @@ impl GridrtApp {
         }
         let Some(gpu) = &self.gpu else { return };
         let (Some(scene), Some(b)) = (&self.scene, &self.built) else { return };
-        let (Some(gs), Some(s)) = (&scene.gpu, &b.gpu) else { return };
+        let (Some(gs), Some(s)) = (b.posed_gpu.as_ref().or(scene.gpu.as_ref()), &b.gpu) else { return };
         if b.built.scene_generation != scene.generation {
             return;
         }
@@ -291,7 +319,23 @@ impl GridrtApp {
             .and_then(|done| gpu.ctx.check_device().map(|()| done))
         {
             // A finished frame ends an earlier render error.
-            Ok(true) => self.errors.clear(|k| *k == ErrorKind::Render),
+            Ok(true) => {
+                self.errors.clear(|k| *k == ErrorKind::Render);
+                if let (Some(tl), Some(p), Some(f)) = (&mut self.timeline, &b.built.pose, &self.viewport.last)
+                    && self.recorded != b.id
+                {
+                    self.recorded = b.id;
+                    let times = FrameTimes {
+                        frame: 0,
+                        seconds: p.time.seconds,
+                        pose_ms: p.pose_ms,
+                        build_ms: b.built.report.times.total(),
+                        upload_ms: b.upload_ms,
+                        trace_ms: f.ms,
+                    };
+                    tl.record(times, Instant::now());
+                }
+            }
             Ok(false) => {}
             Err(e) => {
                 self.viewport.cancel();
@@ -309,6 +353,14 @@ impl eframe::App for GridrtApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         self.apply_hook_commands(&ctx);
+        if let (Some(tl), Some(scene)) = (&mut self.timeline, &self.scene)
+            && let Some(clip) = scene.loaded.clips.get(tl.clip)
+        {
+            tl.tick(clip, Instant::now());
+            if tl.playing {
+                ctx.request_repaint_after(std::time::Duration::from_millis(100));
+            }
+        }
         self.poll_jobs(&ctx);
         self.dropped_files(&ctx);
         if self.scene_job.is_some() || self.build_job.is_some() || self.measure_job.is_some() {
@@ -325,9 +377,11 @@ impl eframe::App for GridrtApp {
             ui.heading("Stats");
             let adapter = self.gpu.as_ref().map_or("none".to_string(), |g| g.ctx.adapter_name());
             let scene = self.scene.as_ref().map(|s| &s.loaded);
+            // A playing animation's rebuilds show in the timeline, not as a spinner.
             let building = self
                 .build_job
                 .as_ref()
+                .filter(|_| !self.posing)
                 .map(|j| (j.what.clone(), j.elapsed_s()))
                 .or_else(|| self.scene_job.as_ref().map(|j| (j.what.clone(), j.elapsed_s())));
             panels::stats(
@@ -347,6 +401,14 @@ impl eframe::App for GridrtApp {
                 self.errors.clear(|k| *k == ErrorKind::Other);
             }
         });
+        if let (Some(tl), Some(scene)) = (&mut self.timeline, &self.scene) {
+            egui::Panel::bottom("timeline").resizable(true).default_size(170.0).size_range(60.0..=480.0).show(
+                ui,
+                |ui| {
+                    timeline::ui(ui, tl, &scene.loaded.clips);
+                },
+            );
+        }
         egui::CentralPanel::default().show(ui, |ui| self.central(ui));
 
         let mut open = self.settings.show_cost_plot;

@@ -39,6 +39,7 @@ impl GridrtApp {
     /// Smoke mode: once enough frames are done, screenshot the window, save it and close.
     pub(super) fn smoke_step(&mut self, ctx: &egui::Context) {
         let frames_done = self.viewport.frames_done;
+        let animation = self.animation_stats();
         let Some(s) = &mut self.smoke else { return };
         ctx.request_repaint();
         if s.started.elapsed().as_secs_f64() > SMOKE_TIMEOUT_S {
@@ -60,7 +61,7 @@ impl GridrtApp {
             .map(|()| {
                 let f = self.viewport.last;
                 format!(
-                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}",
+                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}{}",
                     w,
                     h,
                     s.path.display(),
@@ -72,6 +73,18 @@ impl GridrtApp {
                         f.mean_cells(),
                         f.mean_tests()
                     )),
+                    match animation {
+                        Some(a) => format!(
+                            "; animation: {} frames shown, {} fps (pose {:.1}, build {:.1}, upload {:.1}, trace {:.1} ms)",
+                            a.frames_shown,
+                            a.fps.map_or("-".into(), |f| format!("{f:.2}")),
+                            a.pose_ms,
+                            a.build_ms,
+                            a.upload_ms,
+                            a.trace_ms
+                        ),
+                        None => String::new(),
+                    },
                     match self.measurement.results.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
                         Some(best) => format!(
                             "; cost model: {} resolutions timed, fastest m = {:.1} ({:.1} ms)",
@@ -112,8 +125,39 @@ impl GridrtApp {
                 HookCommand::Open { name, bytes } => self.open(ctx, SceneSource::Bytes { name, bytes }),
                 HookCommand::Capture(id) => self.captures.push_back(id),
                 HookCommand::DismissError => self.errors.clear(|k| matches!(k, ErrorKind::Other | ErrorKind::Render)),
+                HookCommand::Playing(on) => {
+                    if let (Some(t), Some(s)) = (&mut self.timeline, &self.scene)
+                        && t.playing != on
+                    {
+                        t.toggle(&s.loaded.clips[t.clip]);
+                    }
+                }
+                HookCommand::Seek(seconds) => {
+                    if let (Some(t), Some(s)) = (&mut self.timeline, &self.scene) {
+                        t.seconds = s.loaded.clips[t.clip].clamp(seconds);
+                        t.failed = None;
+                    }
+                }
             }
         }
+    }
+
+    /// The timeline as the hook and the smoke run report it.
+    pub(super) fn animation_stats(&self) -> Option<super::hook::AnimationStats> {
+        let t = self.timeline.as_ref()?;
+        let m = t.mean(30).unwrap_or(super::timeline::FrameTimes::zero());
+        Some(super::hook::AnimationStats {
+            clip: t.clip,
+            seconds: t.seconds,
+            shown_seconds: self.built.as_ref().and_then(|b| b.built.pose.as_ref()).map(|p| p.time.seconds),
+            playing: t.playing,
+            frames_shown: t.frames_shown,
+            fps: t.fps(),
+            pose_ms: m.pose_ms,
+            build_ms: m.build_ms,
+            upload_ms: m.upload_ms,
+            trace_ms: m.trace_ms,
+        })
     }
 
     /// Nothing is loading, building or rendering, and the last frame shows the current settings.
@@ -180,6 +224,7 @@ impl GridrtApp {
             idle: self.idle() && self.captures.is_empty() && self.capture.is_none(),
             error: self.errors.joined(),
             first_frame_ms: self.first_frame_ms,
+            animation: self.animation_stats(),
         };
         self.hook.lock().expect("hook lock").stats = stats;
         if (!self.captures.is_empty() || self.capture.is_some())

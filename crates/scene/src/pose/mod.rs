@@ -18,6 +18,7 @@
 //! and runs the vertices on all threads (feature `parallel`, on by default; off in the browser).
 
 mod build;
+pub mod player;
 pub(crate) mod sampler;
 
 use glam::{DMat4, DQuat, DVec3, Vec3};

@@ -16,9 +16,10 @@ use serde::Serialize;
 
 use super::agree;
 use crate::cli::BenchArgs;
-use crate::lab::animation::{FixedView, Player, shadow_rays};
+use crate::lab::animation::{FixedView, shadow_rays};
 use crate::lab::report::{print_table, progress, write_rows};
 use crate::lab::scenes::{default_scenes, gltf_files};
+use gridrt_scene::Player;
 
 /// Image size of the dynamic frames.
 const SIZE: u32 = 512;
