@@ -34,6 +34,9 @@ const BACKGROUND: [u8; 3] = [20, 23, 31];
 const MIN_AGREEMENT: f64 = 0.99;
 /// Longest gap between animation frames allowed while a large scene builds.
 const MAX_FRAME_GAP_MS: f64 = 1500.0;
+/// Tubes in the generated animated scene, and the frames it must show playing.
+const CROWD_TUBES: u32 = 6;
+const ANIMATION_FRAMES: u64 = 5;
 /// Largest mean absolute colour difference (0–255 per channel) against the native render.
 const MAX_MEAN_DIFF: f64 = 3.0;
 
@@ -145,6 +148,8 @@ pub fn run(root: &Path, dist: &Path, out: &Path, chromium: Option<PathBuf>, time
         .arg(dist.join("e2e-large.glb"))
         .status()?;
     ensure!(st.success(), "gridrt gen failed");
+    // An animated one (skinned tubes, rigid balls, a floor): it plays with a rebuild per frame.
+    std::fs::write(dist.join("e2e-crowd.glb"), gridrt_scene::crowd::crowd_glb(CROWD_TUBES, 7))?;
     std::fs::write(dist.join("e2e-corrupt.glb"), b"glTF\x02\x00\x00\x00\xff\xff\x00\x00not a glb at all")?;
     std::fs::write(dist.join("e2e-bomb.glb"), graph_bomb_glb(29))?;
 
@@ -384,6 +389,50 @@ fn drive(
     );
     std::fs::write(out.join("screenshot-large.png"), page.screenshot()?)?;
 
+    // An animated scene plays: each frame posed on the page, rebuilt in the worker, rendered.
+    // (Small frames: SwiftShader takes seconds for a window-sized one.)
+    let workers_before = workers;
+    page.eval(
+        "window.gridrt.set_frame_size(160, 120); \
+         fetch('e2e-crowd.glb').then(r => r.arrayBuffer()).then(b => window.gridrt.open_bytes('e2e-crowd.glb', new Uint8Array(b)))",
+    )?;
+    let a = page.wait_for(
+        "animation frames of e2e-crowd.glb",
+        &format!(
+            "(() => {{ const s = window.gridrt.stats(); if (s.error) throw new Error('the app reports: ' + s.error); \
+               return s.scene === 'e2e-crowd.glb' && s.animation && s.animation.playing \
+                 && s.animation.frames_shown >= {ANIMATION_FRAMES} ? s : null; }})()"
+        ),
+        timeout,
+    )?;
+    let anim = &a["animation"];
+    println!(
+        "web-test: e2e-crowd.glb ({} tris) plays: {} frames shown, {:.2} fps (pose {:.1}, build {:.1}, upload {:.1}, \
+         trace {:.1} ms), {} worker builds",
+        a["triangles"],
+        anim["frames_shown"],
+        anim["fps"].as_f64().unwrap_or(0.0),
+        anim["pose_ms"].as_f64().unwrap_or(0.0),
+        anim["build_ms"].as_f64().unwrap_or(0.0),
+        anim["upload_ms"].as_f64().unwrap_or(0.0),
+        anim["trace_ms"].as_f64().unwrap_or(0.0),
+        a["worker_builds"]
+    );
+    let worker_frames = a["worker_builds"].as_u64().unwrap_or(0).saturating_sub(workers_before);
+    ensure!(worker_frames >= ANIMATION_FRAMES, "only {worker_frames} animation frames were built in the worker");
+    // Paused and moved, it settles on the pose asked for.
+    page.eval("window.gridrt.set_playing('pause'); window.gridrt.seek('1.25'); true")?;
+    let paused = wait_idle(
+        page,
+        "the paused pose at 1.25 s",
+        "s.animation && !s.animation.playing && s.animation.shown_seconds === 1.25",
+        timeout,
+    )?;
+    ensure!(page.eval("window.gridrt.panic()")?.is_null(), "the app panicked while playing");
+    println!("web-test: paused at {} s", paused["animation"]["shown_seconds"]);
+    page.eval("window.gridrt.set_frame_size(0, 0); true")?;
+    std::fs::write(out.join("screenshot-animated.png"), page.screenshot()?)?;
+
     // Without WebGPU the page explains itself instead of staying blank: a browser without
     // navigator.gpu, and one whose requestAdapter() finds nothing.
     let cases = [
@@ -413,6 +462,7 @@ fn drive(
     }
 
     let report = json!({
+        "animation": anim,
         "responsiveness": r,
         "large_scene": s,
         "wasm_bytes": wasm_raw,

@@ -21,7 +21,7 @@ pub struct Built {
 }
 
 /// A scene posed for one animation frame.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Posed {
     pub time: ClipTime,
     pub tris: Arc<Vec<[Vec3; 3]>>,

@@ -153,6 +153,7 @@ pub fn spawn_build(
     {
         let (tx, rx) = channel();
         let wake = ui.clone();
+        let worker_pose = pose.clone();
         let sent = super::web::build_in_worker_async(&tris, &config, move |r| {
             let built = r.and_then(|bytes| decode_structure(&bytes)).map(|(grid, report)| Built {
                 scene_generation,
@@ -160,7 +161,7 @@ pub fn spawn_build(
                 grid,
                 report,
                 in_worker: true,
-                pose,
+                pose: worker_pose,
             });
             let _ = tx.send(built);
             wake.request_repaint();

@@ -119,12 +119,16 @@ impl Timeline {
             self.history.pop_front();
         }
         self.shown_at.push_back(now);
-        while self.shown_at.front().is_some_and(|&t| now.saturating_duration_since(t) > FPS_WINDOW) {
+        // The window's frames, and at least the last two however slow they are.
+        while self.shown_at.len() > 2
+            && self.shown_at.front().is_some_and(|&t| now.saturating_duration_since(t) > FPS_WINDOW)
+        {
             self.shown_at.pop_front();
         }
     }
 
-    /// Frames shown per second over the last few seconds (`None` until two frames were shown).
+    /// Frames shown per second over the last few seconds, or over the last two frames when
+    /// they are further apart (`None` until two frames were shown).
     pub fn fps(&self) -> Option<f64> {
         let (first, last) = (self.shown_at.front()?, self.shown_at.back()?);
         let span = last.saturating_duration_since(*first).as_secs_f64();
@@ -285,8 +289,10 @@ mod tests {
         assert_eq!((m.pose_ms, m.trace_ms), (1.0, 4.0));
         assert!((m.build_ms - 18.0).abs() < 1e-9, "mean of 16..=20: {}", m.build_ms);
         assert_eq!(tl.history.back().unwrap().frame, 20);
-        // Frames older than the window leave the rate.
+        // Frames older than the window leave the rate, but the last two always count.
         tl.record(FrameTimes::zero(), t0 + Duration::from_millis(2000 + 3000));
         assert!(tl.fps().unwrap() < 10.0);
+        tl.record(FrameTimes::zero(), t0 + Duration::from_millis(5000 + 10_000));
+        assert!((tl.fps().unwrap() - 0.1).abs() < 1e-9, "one frame in 10 s: {:?}", tl.fps());
     }
 }
