@@ -46,14 +46,37 @@ pub fn prepare(geom: &GridGeometry, tri: &[Vec3; 3], margin: f64) -> GridTriangl
     let min = geom.min.as_dvec3();
     let inv = geom.inv_cell.as_dvec3();
     let v = tri.map(|p| (p.as_dvec3() - min) * inv);
-    let lo = v[0].min(v[1]).min(v[2]) - DVec3::splat(margin);
-    let hi = v[0].max(v[1]).max(v[2]) + DVec3::splat(margin);
-    let max = (geom.res - UVec3::ONE).as_dvec3();
-    // Clamping to [0, res − 1] then truncating equals flooring then clamping, and avoids a libm
-    // call per component (x86-64's baseline has no SSE4.1 round instruction).
-    let lo = lo.clamp(DVec3::ZERO, max).as_uvec3();
-    let hi = hi.clamp(DVec3::ZERO, max).as_uvec3();
+    let [lo, hi] = box_cell_range(geom, tri, margin as f32);
     GridTriangle { v, lo, hi, margin }
+}
+
+/// The cells within `margin` cells of a triangle's bounding box, clamped to the grid: computed in
+/// f32 with operations every WGSL implementation rounds the same way (a subtraction, then a
+/// product, then exact floor and fraction), so that the GPU build
+/// (`shaders/build_count.wgsl`, `cell_range`) finds exactly the same cells. The rounding (at most
+/// about 2^-24 × 2 × 1024 cells) is far below the margin, so the range stays conservative.
+#[inline]
+pub fn box_cell_range(geom: &GridGeometry, tri: &[Vec3; 3], margin: f32) -> [UVec3; 2] {
+    let g = tri.map(|p| (p - geom.min) * geom.inv_cell);
+    grid_box_cells(g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]), geom.res, margin)
+}
+
+/// The cells within `margin` of the grid-space box `[lo, hi]`, clamped to `res`: on each axis
+/// the cell of `x − margin` and the cell of `x + margin`, from `x`'s floor and exact fraction.
+#[inline]
+pub fn grid_box_cells(lo: Vec3, hi: Vec3, res: UVec3, margin: f32) -> [UVec3; 2] {
+    let cell = |x: f32, n: u32, upper: bool| -> u32 {
+        // Clamped to [0, n] first, so truncation is floor and the fraction is exact.
+        let c = x.clamp(0.0, n as f32);
+        let i = c as u32;
+        let frac = c - i as f32;
+        let i = if upper { i + (frac >= 1.0 - margin) as u32 } else { i - (frac < margin && i > 0) as u32 };
+        i.min(n - 1)
+    };
+    [
+        UVec3::new(cell(lo.x, res.x, false), cell(lo.y, res.y, false), cell(lo.z, res.z, false)),
+        UVec3::new(cell(hi.x, res.x, true), cell(hi.y, res.y, true), cell(hi.z, res.z, true)),
+    ]
 }
 
 /// Calls `f(cell_index)` for every cell `tri` is inserted into, in increasing index order

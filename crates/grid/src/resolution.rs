@@ -252,38 +252,30 @@ pub const EXACT_COUNT_LIMIT: usize = 1 << 14;
 /// A grid's constants for counting the cells of a triangle's bounding box.
 #[derive(Clone, Copy, Debug)]
 struct BoxCounter {
-    min: glam::DVec3,
-    inv: glam::DVec3,
-    max: glam::DVec3,
+    inv: Vec3,
+    res: glam::UVec3,
 }
 
 impl BoxCounter {
     fn new(geom: &GridGeometry) -> BoxCounter {
-        BoxCounter {
-            min: geom.min.as_dvec3(),
-            inv: geom.inv_cell.as_dvec3(),
-            max: (geom.res - glam::UVec3::ONE).as_dvec3(),
-        }
+        BoxCounter { inv: geom.inv_cell, res: geom.res }
     }
 
     /// Cells the bounding box `[lo, hi]` covers, given relative to the grid's corner (`min` is
-    /// the same at every resolution, so callers subtract it once). The same arithmetic as
-    /// [`prepare`]: the per-axis map to grid space is monotonic, so transforming the box's
-    /// corners gives exactly the min and max of the transformed vertices.
+    /// the same at every resolution, so callers subtract it once). Exactly [`prepare`]'s cells:
+    /// the per-axis map to grid space rounds monotonically, so mapping the box's corners gives
+    /// exactly the min and max of the mapped vertices.
     #[inline]
-    fn cells(&self, lo: glam::DVec3, hi: glam::DVec3) -> u64 {
-        // Clamping to [0, res − 1] first and truncating equals flooring then clamping, without
-        // a libm call per component (x86-64's baseline has no SSE4.1 round).
-        let l = (lo * self.inv - INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
-        let h = (hi * self.inv + INSERT_MARGIN_CELLS).clamp(glam::DVec3::ZERO, self.max).as_uvec3();
+    fn cells(&self, lo: Vec3, hi: Vec3) -> u64 {
+        let [l, h] = crate::insert::grid_box_cells(lo * self.inv, hi * self.inv, self.res, INSERT_MARGIN_CELLS as f32);
         let e = h - l + glam::UVec3::ONE;
         e.x as u64 * e.y as u64 * e.z as u64
     }
 
     /// Whether the box is narrower than one cell (minus the margins) on every axis.
     #[inline]
-    fn is_small(&self, lo: glam::DVec3, hi: glam::DVec3) -> bool {
-        ((hi - lo) * self.inv).max_element() + 2.0 * INSERT_MARGIN_CELLS < 1.0
+    fn is_small(&self, lo: Vec3, hi: Vec3) -> bool {
+        (((hi - lo) * self.inv).max_element() as f64) + 2.0 * INSERT_MARGIN_CELLS < 1.0
     }
 }
 
@@ -316,7 +308,7 @@ pub fn count_refs_curve(
     let grids: Vec<GridGeometry> = resolutions.iter().map(|&r| GridGeometry::new(bounds, r)).collect();
     let geoms: Vec<BoxCounter> = grids.iter().map(BoxCounter::new).collect();
     // Cells triangle `t` (box `[lo, hi]` relative to the grid corner) goes into at resolution i.
-    let count = |i: usize, t: &[Vec3; 3], lo: glam::DVec3, hi: glam::DVec3| match mode {
+    let count = |i: usize, t: &[Vec3; 3], lo: Vec3, hi: Vec3| match mode {
         InsertMode::BoundingBox => geoms[i].cells(lo, hi),
         InsertMode::Exact => cell_count(&grids[i], &prepare(&grids[i], t, INSERT_MARGIN_CELLS), mode),
     };
@@ -324,7 +316,7 @@ pub fn count_refs_curve(
     if k == 0 {
         return (Vec::new(), tris.len());
     }
-    let min = geoms[0].min;
+    let min = grids[0].min;
     let stride = tris.len().div_ceil(EXACT_COUNT_LIMIT).max(1);
     // Per chunk: [exact counts of large and sampled small triangles ×k, small total, small
     // sampled, large count at the first resolution].
@@ -333,8 +325,8 @@ pub fn count_refs_curve(
         let mut small = vec![0u64; k];
         let (mut n_small, mut n_sampled) = (0u64, 0u64);
         for (j, t) in part.iter().enumerate() {
-            let lo = t[0].min(t[1]).min(t[2]).as_dvec3() - min;
-            let hi = t[0].max(t[1]).max(t[2]).as_dvec3() - min;
+            let lo = t[0].min(t[1]).min(t[2]) - min;
+            let hi = t[0].max(t[1]).max(t[2]) - min;
             let c0 = count(0, t, lo, hi);
             if stride > 1 && geoms[0].is_small(lo, hi) {
                 n_small += 1;

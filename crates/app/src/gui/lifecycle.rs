@@ -87,7 +87,11 @@ impl GridrtApp {
                 }
             }
         }
-        if self.ready.is_some() && !self.viewport.busy() {
+        // The frame in flight is only waited for when it shows the same scene (a previous
+        // animation frame); one of a replaced scene is never finished (nothing renders it on).
+        let same_scene =
+            self.built.as_ref().map(|b| b.built.scene_generation) == self.scene.as_ref().map(|s| s.generation);
+        if self.ready.is_some() && (!self.viewport.busy() || !same_scene) {
             let b = self.ready.take().expect("a ready frame");
             if Some(b.scene_generation) == self.scene.as_ref().map(|s| s.generation) {
                 self.set_built(b);
