@@ -116,3 +116,23 @@ impl FrameTotals {
         self.tests[0] as u64 | (self.tests[1] as u64) << 32
     }
 }
+
+/// Parameters of one pass of the GPU grid build (uniform). WGSL `BuildParams` in
+/// shaders/shared/build.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BuildParams {
+    /// xyz: grid box minimum.
+    pub grid_min: [f32; 4],
+    /// xyz: 1 / cell size.
+    pub inv_cell: [f32; 4],
+    pub res: [u32; 3],
+    pub triangle_count: u32,
+    /// Insertion margin, in cells.
+    pub margin: f32,
+    /// Elements of the array a scan or per-cell pass covers.
+    pub count: u32,
+    /// Workgroups along x of the pass's 2-D dispatch.
+    pub groups_x: u32,
+    pub pad: u32,
+}

@@ -5,6 +5,7 @@
 //! ([`upload`]) → a trace kernel per structure ([`kernel`], `shaders/<kernel>.wgsl`, [`trace`]) → hits and
 //! per-ray stats; the render pass ([`render`]) adds camera rays, shadow rays and shading.
 
+pub mod build;
 pub mod context;
 pub mod cpu;
 pub mod kernel;

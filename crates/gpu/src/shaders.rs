@@ -16,6 +16,12 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shadow.wgsl", include_str!("../../../shaders/shadow.wgsl")),
     ("shade.wgsl", include_str!("../../../shaders/shade.wgsl")),
     ("present.wgsl", include_str!("../../../shaders/present.wgsl")),
+    ("build_bounds.wgsl", include_str!("../../../shaders/build_bounds.wgsl")),
+    ("build_count.wgsl", include_str!("../../../shaders/build_count.wgsl")),
+    ("build_scan.wgsl", include_str!("../../../shaders/build_scan.wgsl")),
+    ("build_scan_add.wgsl", include_str!("../../../shaders/build_scan_add.wgsl")),
+    ("build_scatter.wgsl", include_str!("../../../shaders/build_scatter.wgsl")),
+    ("build_sort_cells.wgsl", include_str!("../../../shaders/build_sort_cells.wgsl")),
     ("shared/types.wgsl", include_str!("../../../shaders/shared/types.wgsl")),
     ("shared/bindings.wgsl", include_str!("../../../shaders/shared/bindings.wgsl")),
     ("shared/ray.wgsl", include_str!("../../../shaders/shared/ray.wgsl")),
@@ -26,6 +32,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/walker_liu.wgsl", include_str!("../../../shaders/shared/walker_liu.wgsl")),
     ("shared/closest_hit.wgsl", include_str!("../../../shaders/shared/closest_hit.wgsl")),
     ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
+    ("shared/build.wgsl", include_str!("../../../shaders/shared/build.wgsl")),
 ];
 
 /// Error composing a shader: an unknown file or include.

@@ -1,4 +1,5 @@
 //! Test modules of the GPU crate (one binary; see ../gpu.rs).
+pub mod build;
 pub mod common;
 pub mod layout;
 pub mod naga_validate;

@@ -1,0 +1,84 @@
+//! The GPU grid build against the CPU's: the same bounds, and flat grids equal cell for cell and
+//! reference for reference, on generated scenes (huge, tiny, degenerate, far from the origin),
+//! at several resolutions (scan levels 1 to 3), and on the shared scenes; a GPU-built grid
+//! traces like the CPU-built one.
+
+use glam::Vec3;
+use gridrt_gpu::build::GridBuilder;
+use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_grid::build::{BuildOptions, PhaseTimes};
+use gridrt_grid::geometry::GridGeometry;
+use gridrt_grid::{FlatGrid, GridConfig, GridKind, InsertMode, Resolution, Traversal, structure, triangle_bounds};
+use gridrt_scene::procedural::{self, SceneKind};
+
+use super::common::gpu;
+
+fn check(name: &str, tris: &[[Vec3; 3]], resolutions: &[[u32; 3]]) {
+    let ctx = gpu().expect("checked by the caller");
+    let builder = GridBuilder::new(ctx).unwrap();
+    let scene = GpuScene::new(ctx, tris).unwrap();
+    let bounds = builder.bounds(ctx, &scene).unwrap();
+    let cpu_bounds = triangle_bounds(tris);
+    assert_eq!(bounds, cpu_bounds, "{name}: bounds");
+    for &res in resolutions {
+        let geom = GridGeometry::new(&bounds, res);
+        let opts = BuildOptions { insert: InsertMode::BoundingBox, parallel: true };
+        let cpu = FlatGrid::build(tris, geom, opts, &mut PhaseTimes::default()).unwrap();
+        let g = builder.build_flat(ctx, &scene, geom).unwrap();
+        let back = builder.read_back(ctx, &g).unwrap();
+        assert_eq!(back.cell_start, cpu.cell_start, "{name} {res:?}: cell_start");
+        assert_eq!(back.refs, cpu.refs, "{name} {res:?}: refs");
+        assert_eq!(back, cpu, "{name} {res:?}");
+        println!("{name} {res:?}: {} cells, {} refs, equal ({:?})", g.cells, g.refs, g.times);
+    }
+}
+
+#[test]
+fn gpu_build_equals_the_cpu_build() {
+    if gpu().is_none() {
+        return;
+    }
+    let far: Vec<[Vec3; 3]> = procedural::generate(SceneKind::Particles, 3000, 5)
+        .mesh
+        .triangles()
+        .iter()
+        .map(|t| t.map(|p| p * 10.0 + Vec3::new(1e5, -3e4, 7e3)))
+        .collect();
+    let mut degenerate = procedural::generate(SceneKind::Slivers, 2000, 6).mesh.triangles();
+    degenerate.extend((0..200).map(|i| [Vec3::splat(i as f32 * 0.01); 3]));
+    let scenes = [
+        ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh.triangles()),
+        ("particles", procedural::generate(SceneKind::Particles, 40_000, 2).mesh.triangles()),
+        ("mountain", procedural::generate(SceneKind::Mountain, 6, 1).mesh.triangles()),
+        ("far from the origin", far),
+        ("slivers and points", degenerate),
+        ("one triangle", vec![[Vec3::ZERO, Vec3::X, Vec3::Y]]),
+    ];
+    for (name, tris) in &scenes {
+        // 1 cell; a scan of one block; two levels; three levels (> 512² cells + 1).
+        check(name, tris, &[[1, 1, 1], [7, 5, 3], [64, 40, 50], [80, 70, 60]]);
+    }
+}
+
+#[test]
+fn gpu_build_of_shared_scenes_at_auto_resolution() {
+    let Some(ctx) = gpu() else { return };
+    for path in gridrt_testkit::shared_scenes().into_iter().take(if gridrt_testkit::full_matrices() { 99 } else { 2 }) {
+        let (mesh, _) = gridrt_scene::gltf_load::load_path(&path).unwrap();
+        let tris = mesh.triangles();
+        let cfg = GridConfig { kind: GridKind::Flat, resolution: Some(Resolution::Auto), ..GridConfig::default() };
+        let (cpu, _) = structure::build(&tris, &cfg).unwrap();
+        let res = cpu.geometry().res.to_array();
+        check(&path.file_name().unwrap().to_string_lossy(), &tris, &[res]);
+        // Traced through the GPU-built buffers: the same hits as through the uploaded CPU grid.
+        let builder = GridBuilder::new(ctx).unwrap();
+        let scene = GpuScene::new(ctx, &tris).unwrap();
+        let g = builder.build_flat(ctx, &scene, *cpu.geometry()).unwrap();
+        let uploaded = GpuStructure::new(ctx, &cpu).unwrap();
+        let rays = gridrt_scene::rays::random_rays(&mesh.bounds(), 2000, 9);
+        let tracer = gridrt_gpu::Tracer::new();
+        let a = tracer.trace(ctx, &scene, &g.structure, &rays, Traversal::AmanatidesWoo, true).unwrap();
+        let b = tracer.trace(ctx, &scene, &uploaded, &rays, Traversal::AmanatidesWoo, true).unwrap();
+        assert_eq!(a.0, b.0, "{}: hits", path.display());
+    }
+}
