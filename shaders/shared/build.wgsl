@@ -17,7 +17,8 @@ struct BuildParams {
     count: u32,
     // Workgroups along x of a 2-D dispatch: kernels number their workgroups wid.x + wid.y * groups_x.
     groups_x: u32,
-    pad: u32,
+    // Fine cells per macrocell edge (build_occupancy).
+    macro_edge: u32,
 }
 
 struct CellRange {

@@ -2,15 +2,21 @@
 //! (`build_bounds.wgsl`), per-cell counts (`build_count.wgsl`), their exclusive prefix sum
 //! (`build_scan.wgsl` per block of 512, block sums scanned recursively, `build_scan_add.wgsl`),
 //! the scatter of triangle indices (`build_scatter.wgsl`) and each cell's references sorted
-//! (`build_sort_cells.wgsl`). Insertion is by bounding box with the conservative margin, the
-//! same f32 rule as `gridrt_grid::insert::box_cell_range`; the resolution is chosen on the CPU
-//! from the GPU's bounds (the cost model samples triangles). The result is a
-//! [`GpuStructure`] the trace and render kernels use directly, and can be read back as a
-//! [`FlatGrid`].
+//! (`build_sort_cells.wgsl`); for macrocells, the occupancy bits from the cell table
+//! (`build_occupancy.wgsl`, per candidate A when the cost model chooses A, as on the CPU).
+//! Insertion is by bounding box with the conservative margin, the same f32 rule as
+//! `gridrt_grid::insert::box_cell_range`; the resolution is chosen on the CPU from the GPU's
+//! bounds (the cost model samples triangles). The result is a [`GpuStructure`] the trace and
+//! render kernels use directly, and can be read back as the CPU's [`AnyGrid`].
 
-use gridrt_grid::build::{MAX_REFS, PhaseTimes};
+use glam::{UVec3, Vec3};
+use gridrt_grid::build::{MAX_REFS, PhaseTimes, check_cells};
 use gridrt_grid::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
-use gridrt_grid::{FlatGrid, GridKind};
+use gridrt_grid::macrocell::{
+    MACRO_SIZES, MacroSample, MacrocellGrid, PROBE_MULTIPLE, best_macro_size, check_macro_size, fine_resolution,
+    macro_resolution,
+};
+use gridrt_grid::{AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, Resolution, ResolutionChoice, resolution};
 use gridrt_scene::Aabb;
 use wgpu::util::DeviceExt;
 
@@ -35,16 +41,25 @@ pub struct GridBuilder {
     scan_add: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     sort: wgpu::ComputePipeline,
+    occupancy: wgpu::ComputePipeline,
 }
 
-/// A flat grid on the GPU, and what its build measured.
+/// A grid built on the GPU (flat, or macrocells over a flat fine grid), and what its build
+/// measured.
 #[derive(Debug)]
-pub struct GpuFlatGrid {
+pub struct GpuGrid {
+    /// The (fine) grid's box and resolution.
     pub geom: GridGeometry,
     pub structure: GpuStructure,
     pub cells: u64,
     pub refs: u64,
-    /// Milliseconds per phase (each phase waits for the GPU).
+    /// Macrocell edge A and the macro resolution.
+    pub macrocells: Option<(u32, UVec3)>,
+    /// The occupancy of each candidate A, when the cost model chose A.
+    pub macro_samples: Vec<MacroSample>,
+    /// The resolution choice (when built through [`GridBuilder::build`]).
+    pub choice: Option<ResolutionChoice>,
+    /// Milliseconds per phase (each GPU phase waits for the GPU).
     pub times: PhaseTimes,
 }
 
@@ -68,7 +83,125 @@ impl GridBuilder {
             scan_add: pipeline(ctx, "build_scan_add.wgsl", "build_scan_add")?,
             scatter: pipeline(ctx, "build_scatter.wgsl", "build_scatter")?,
             sort: pipeline(ctx, "build_sort_cells.wgsl", "build_sort_cells")?,
+            occupancy: pipeline(ctx, "build_occupancy.wgsl", "build_occupancy")?,
         })
+    }
+
+    /// Builds `cfg` over the scene (whose CPU copy is `tris`, for the resolution choice): flat or
+    /// macrocell grids with box insertion; other kinds and exact insertion are refused.
+    pub fn build(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        tris: &[[Vec3; 3]],
+        cfg: &GridConfig,
+    ) -> Result<GpuGrid, GpuError> {
+        if !matches!(cfg.kind, GridKind::Flat | GridKind::Macrocell) || cfg.build.insert != InsertMode::BoundingBox {
+            return Err(GpuError::Unsupported(format!(
+                "the GPU build makes flat and macrocell grids with box insertion (asked: {} with {:?} insertion); use the CPU build",
+                cfg.kind, cfg.build.insert
+            )));
+        }
+        let mut times = PhaseTimes::default();
+        let start = web_time::Instant::now();
+        let bounds = self.bounds(ctx, scene)?;
+        times.record_since("bounds", start);
+        let policy = cfg.resolution.unwrap_or(Resolution::Auto);
+        let choice = times.record("resolution", || {
+            resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.insert, cfg.build.parallel)
+        });
+        check_cells(choice.resolution, cfg.cost.max_cells)?;
+        let mut g = match cfg.kind {
+            GridKind::Macrocell => self.build_macrocell(ctx, scene, &bounds, choice.resolution, cfg.macro_size)?,
+            _ => self.build_flat(ctx, scene, GridGeometry::new(&bounds, choice.resolution))?,
+        };
+        times.0.append(&mut g.times.0);
+        g.times = times;
+        g.choice = Some(choice);
+        Ok(g)
+    }
+
+    /// The occupancy bits of macrocells of edge `a` over `fine` (whose resolution is a multiple
+    /// of `a`), recorded into `enc`.
+    fn occupancy(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        fine: &GpuGrid,
+        a: u32,
+    ) -> Result<(UVec3, wgpu::Buffer), GpuError> {
+        let macro_res = macro_resolution(fine.geom.res, a);
+        let words = (macro_res.x as u64 * macro_res.y as u64 * macro_res.z as u64).div_ceil(32);
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let bits = Self::buffer(ctx, "structure extra (occupancy/nodes/distance)", words, storage)?;
+        let params = BuildParams {
+            res: fine.geom.res.to_array(),
+            count: fine.cells as u32,
+            macro_edge: a,
+            ..Default::default()
+        };
+        let groups = (fine.cells as u32).div_ceil(GROUP);
+        Self::pass(ctx, enc, &self.occupancy, "build_occupancy", params, groups, &[&fine.structure.cells, &bits])?;
+        Ok((macro_res, bits))
+    }
+
+    /// Macrocells over a fine grid at `res` rounded up to multiples of A: A as given, or chosen
+    /// by the cost model from a probe grid (as `MacrocellGrid::build` does on the CPU).
+    pub fn build_macrocell(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        bounds: &Aabb,
+        res: [u32; 3],
+        a: Option<u32>,
+    ) -> Result<GpuGrid, GpuError> {
+        let (a, samples, probe) = match a {
+            Some(a) => {
+                check_macro_size(a)?;
+                (a, Vec::new(), None)
+            }
+            None => {
+                let probe =
+                    self.build_flat(ctx, scene, GridGeometry::new(bounds, fine_resolution(res, PROBE_MULTIPLE)))?;
+                let start = web_time::Instant::now();
+                let mut samples = Vec::new();
+                for a in MACRO_SIZES {
+                    let mut enc = Self::encoder(ctx, "grid build: macrocell sample");
+                    let (macro_res, bits) = self.occupancy(ctx, &mut enc, &probe, a)?;
+                    let words = bits.size() / WORD;
+                    let occ = Self::submit_and_read(ctx, enc, &bits, 0, words, "the macrocell occupancy")?;
+                    samples.push(MacroSample::from_occupancy(a, macro_res, &occ));
+                }
+                let mut probe = probe;
+                probe.times.record_since("macro-size", start);
+                (best_macro_size(&samples), samples, Some(probe))
+            }
+        };
+        let target = fine_resolution(res, a);
+        let mut fine = match probe {
+            Some(f) if f.geom.res.to_array() == target => f,
+            Some(f) => {
+                let mut g = self.build_flat(ctx, scene, GridGeometry::new(bounds, target))?;
+                let mut t = f.times;
+                t.0.append(&mut g.times.0);
+                g.times = t;
+                g
+            }
+            None => self.build_flat(ctx, scene, GridGeometry::new(bounds, target))?,
+        };
+        let start = web_time::Instant::now();
+        let mut enc = Self::encoder(ctx, "grid build: occupancy");
+        let (macro_res, bits) = self.occupancy(ctx, &mut enc, &fine, a)?;
+        ctx.queue.submit([enc.finish()]);
+        wait(ctx)?;
+        fine.times.record_since("occupancy", start);
+        fine.structure.kind = GridKind::Macrocell;
+        fine.structure.params.macro_edge = a;
+        fine.structure.bytes += bits.size();
+        fine.structure.extra = Some(bits);
+        fine.macrocells = Some((a, macro_res));
+        fine.macro_samples = samples;
+        Ok(fine)
     }
 
     /// Records one pass over `groups` workgroups with `params` (its `groups_x` filled in).
@@ -181,7 +314,7 @@ impl GridBuilder {
     }
 
     /// Builds the flat grid `geom` over the scene's triangles (box insertion).
-    pub fn build_flat(&self, ctx: &GpuContext, scene: &GpuScene, geom: GridGeometry) -> Result<GpuFlatGrid, GpuError> {
+    pub fn build_flat(&self, ctx: &GpuContext, scene: &GpuScene, geom: GridGeometry) -> Result<GpuGrid, GpuError> {
         let mut times = PhaseTimes::default();
         let cells = geom.cell_count();
         let n = scene.triangle_count;
@@ -257,11 +390,20 @@ impl GridBuilder {
             extra: None,
             bytes: (cells + 1 + total) * WORD,
         };
-        Ok(GpuFlatGrid { geom, structure, cells, refs: total, times })
+        Ok(GpuGrid {
+            geom,
+            structure,
+            cells,
+            refs: total,
+            macrocells: None,
+            macro_samples: Vec::new(),
+            choice: None,
+            times,
+        })
     }
 
-    /// The grid's cell table and references, read back into the CPU's form.
-    pub fn read_back(&self, ctx: &GpuContext, grid: &GpuFlatGrid) -> Result<FlatGrid, GpuError> {
+    /// The grid read back into the CPU's form.
+    pub fn read_back(&self, ctx: &GpuContext, grid: &GpuGrid) -> Result<AnyGrid, GpuError> {
         let cell_start = Self::submit_and_read(
             ctx,
             Self::encoder(ctx, "grid readback"),
@@ -282,7 +424,16 @@ impl GridBuilder {
                 "the refs",
             )?
         };
-        Ok(FlatGrid::new(grid.geom, cell_start, refs))
+        let fine = FlatGrid::new(grid.geom, cell_start, refs);
+        Ok(match (grid.macrocells, &grid.structure.extra) {
+            (Some((a, macro_res)), Some(bits)) => {
+                let words = bits.size() / WORD;
+                let occupancy =
+                    Self::submit_and_read(ctx, Self::encoder(ctx, "grid readback"), bits, 0, words, "the occupancy")?;
+                AnyGrid::Macrocell(MacrocellGrid { fine, a, macro_res, occupancy })
+            }
+            _ => AnyGrid::Flat(fine),
+        })
     }
 }
 

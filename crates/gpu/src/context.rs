@@ -47,6 +47,8 @@ pub enum GpuError {
     Unsupported(String),
     #[error("the GPU device reported: {0}")]
     Device(String),
+    #[error(transparent)]
+    Build(#[from] gridrt_grid::BuildError),
 }
 
 /// A device and queue with what is known about them.

@@ -134,5 +134,6 @@ pub struct BuildParams {
     pub count: u32,
     /// Workgroups along x of the pass's 2-D dispatch.
     pub groups_x: u32,
-    pub pad: u32,
+    /// Fine cells per macrocell edge (the occupancy pass).
+    pub macro_edge: u32,
 }

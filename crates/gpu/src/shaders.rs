@@ -22,6 +22,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("build_scan_add.wgsl", include_str!("../../../shaders/build_scan_add.wgsl")),
     ("build_scatter.wgsl", include_str!("../../../shaders/build_scatter.wgsl")),
     ("build_sort_cells.wgsl", include_str!("../../../shaders/build_sort_cells.wgsl")),
+    ("build_occupancy.wgsl", include_str!("../../../shaders/build_occupancy.wgsl")),
     ("shared/types.wgsl", include_str!("../../../shaders/shared/types.wgsl")),
     ("shared/bindings.wgsl", include_str!("../../../shaders/shared/bindings.wgsl")),
     ("shared/ray.wgsl", include_str!("../../../shaders/shared/ray.wgsl")),

@@ -68,25 +68,20 @@ impl MacrocellGrid {
             |res: [u32; 3], times: &mut PhaseTimes| FlatGrid::build(tris, GridGeometry::new(bounds, res), opts, times);
         let (a, samples, probe) = match a {
             Some(a) => {
-                if !a.is_power_of_two() || a > 64 {
-                    return Err(BuildError::InvalidParameter(format!(
-                        "macrocell size {a} must be a power of two ≤ 64"
-                    )));
-                }
+                check_macro_size(a)?;
                 (a, Vec::new(), None)
             }
             None => {
                 // Occupancy of each candidate A, from a fine grid at a resolution divisible by 16
                 // (and so by every candidate).
-                let fine = build_fine(round_up(res, 16), times)?;
+                let fine = build_fine(fine_resolution(res, PROBE_MULTIPLE), times)?;
                 let samples: Vec<MacroSample> =
                     times.record("macro-size", || MACRO_SIZES.iter().map(|&a| sample(&fine, a)).collect());
-                let best = samples.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)).expect("four samples").a;
-                (best, samples, Some(fine))
+                (best_macro_size(&samples), samples, Some(fine))
             }
         };
         // The probe is the final fine grid when rounding to A gives the same resolution.
-        let target = round_up(res, a);
+        let target = fine_resolution(res, a);
         let fine = match probe {
             Some(f) if f.geom.res.to_array() == target => f,
             _ => build_fine(target, times)?,
@@ -159,21 +154,50 @@ impl MacrocellGrid {
     }
 }
 
-fn round_up(res: [u32; 3], a: u32) -> [u32; 3] {
+/// The probe grid's resolution is a multiple of this (and so of every candidate A).
+pub const PROBE_MULTIPLE: u32 = 16;
+
+/// Refuses a macrocell size that is not a power of two ≤ 64.
+pub fn check_macro_size(a: u32) -> Result<(), BuildError> {
+    if !a.is_power_of_two() || a > 64 {
+        return Err(BuildError::InvalidParameter(format!("macrocell size {a} must be a power of two ≤ 64")));
+    }
+    Ok(())
+}
+
+/// The fine resolution for macrocells of edge `a`: `res` rounded up to multiples of `a`.
+pub fn fine_resolution(res: [u32; 3], a: u32) -> [u32; 3] {
     res.map(|r| r.max(1).div_ceil(a) * a)
+}
+
+/// The macro grid over a fine grid of `res` (a multiple of `a`).
+pub fn macro_resolution(res: UVec3, a: u32) -> UVec3 {
+    UVec3::new(res.x.div_ceil(a), res.y.div_ceil(a), res.z.div_ceil(a))
+}
+
+/// The A whose sample costs least.
+pub fn best_macro_size(samples: &[MacroSample]) -> u32 {
+    samples.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)).map_or(MACRO_SIZES[0], |s| s.a)
+}
+
+impl MacroSample {
+    /// The sample of macrocells of edge `a` from their occupancy bits.
+    pub fn from_occupancy(a: u32, macro_res: UVec3, occupancy: &[u32]) -> MacroSample {
+        let cells = macro_res.x as u64 * macro_res.y as u64 * macro_res.z as u64;
+        let occupied: u64 = occupancy.iter().map(|w| w.count_ones() as u64).sum();
+        MacroSample { a, macro_cells: cells, occupied, cost: 1.0 / a as f64 + occupied as f64 / cells as f64 }
+    }
 }
 
 fn sample(fine: &FlatGrid, a: u32) -> MacroSample {
     let (macro_res, occ) = occupancy(fine, a);
-    let cells = macro_res.x as u64 * macro_res.y as u64 * macro_res.z as u64;
-    let occupied: u64 = occ.iter().map(|w| w.count_ones() as u64).sum();
-    MacroSample { a, macro_cells: cells, occupied, cost: 1.0 / a as f64 + occupied as f64 / cells as f64 }
+    MacroSample::from_occupancy(a, macro_res, &occ)
 }
 
 /// Macro resolution and occupancy bits of a fine grid whose resolution is a multiple of `a`.
 fn occupancy(fine: &FlatGrid, a: u32) -> (UVec3, Vec<u32>) {
     let res = fine.geom.res;
-    let macro_res = UVec3::new(res.x.div_ceil(a), res.y.div_ceil(a), res.z.div_ceil(a));
+    let macro_res = macro_resolution(res, a);
     let n = macro_res.x as usize * macro_res.y as usize * macro_res.z as usize;
     let mut occupancy = vec![0u32; n.div_ceil(32)];
     for z in 0..res.z {

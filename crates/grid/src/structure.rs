@@ -158,6 +158,27 @@ impl AnyGrid {
         trace_batch(rays, parallel, |r| self.trace(tris, r, opts))
     }
 
+    /// A 64-bit FNV-1a hash of the structure's arrays as the GPU reads them: the cell table
+    /// (`cell_start`, or a hierarchy's cells), then the references, then the kind's extra array
+    /// (macrocell occupancy, proximity distances), each as little-endian words. Two builds
+    /// (serial or parallel, CPU or GPU) are identical exactly when the digests are, barring a
+    /// hash collision.
+    pub fn cells_digest(&self) -> u64 {
+        let (cells, refs, extra_words, extra_bytes): (&[u32], &[u32], &[u32], &[u8]) = match self {
+            AnyGrid::Flat(g) => (&g.cell_start, &g.refs, &[], &[]),
+            AnyGrid::Macrocell(g) => (&g.fine.cell_start, &g.fine.refs, &g.occupancy, &[]),
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => (&h.cells, &h.refs, &[], &[]),
+            AnyGrid::Proximity(p) => (&p.grid.cell_start, &p.grid.refs, &[], &p.distance),
+        };
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut eat = |b: u8| h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        for w in cells.iter().chain(refs).chain(extra_words) {
+            w.to_le_bytes().into_iter().for_each(&mut eat);
+        }
+        extra_bytes.iter().for_each(|&b| eat(b));
+        h
+    }
+
     pub fn memory_bytes(&self) -> u64 {
         match self {
             AnyGrid::Flat(g) => g.memory_bytes(),

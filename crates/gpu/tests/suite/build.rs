@@ -8,7 +8,9 @@ use gridrt_gpu::build::GridBuilder;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_grid::build::{BuildOptions, PhaseTimes};
 use gridrt_grid::geometry::GridGeometry;
-use gridrt_grid::{FlatGrid, GridConfig, GridKind, InsertMode, Resolution, Traversal, structure, triangle_bounds};
+use gridrt_grid::{
+    AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, Resolution, Traversal, structure, triangle_bounds,
+};
 use gridrt_scene::procedural::{self, SceneKind};
 
 use super::common::gpu;
@@ -25,7 +27,7 @@ fn check(name: &str, tris: &[[Vec3; 3]], resolutions: &[[u32; 3]]) {
         let opts = BuildOptions { insert: InsertMode::BoundingBox, parallel: true };
         let cpu = FlatGrid::build(tris, geom, opts, &mut PhaseTimes::default()).unwrap();
         let g = builder.build_flat(ctx, &scene, geom).unwrap();
-        let back = builder.read_back(ctx, &g).unwrap();
+        let AnyGrid::Flat(back) = builder.read_back(ctx, &g).unwrap() else { panic!("{name}: not a flat grid") };
         assert_eq!(back.cell_start, cpu.cell_start, "{name} {res:?}: cell_start");
         assert_eq!(back.refs, cpu.refs, "{name} {res:?}: refs");
         assert_eq!(back, cpu, "{name} {res:?}");
@@ -80,5 +82,52 @@ fn gpu_build_of_shared_scenes_at_auto_resolution() {
         let a = tracer.trace(ctx, &scene, &g.structure, &rays, Traversal::AmanatidesWoo, true).unwrap();
         let b = tracer.trace(ctx, &scene, &uploaded, &rays, Traversal::AmanatidesWoo, true).unwrap();
         assert_eq!(a.0, b.0, "{}: hits", path.display());
+    }
+}
+
+/// Through the whole pipeline (bounds, resolution choice, build): flat and macrocell grids
+/// (A given, and A chosen by the cost model from a probe grid) equal the CPU's, digests
+/// included; other kinds and exact insertion are refused with a message.
+#[test]
+fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
+    let Some(ctx) = gpu() else { return };
+    let builder = GridBuilder::new(ctx).unwrap();
+    let scenes = [
+        ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh.triangles()),
+        ("particles", procedural::generate(SceneKind::Particles, 30_000, 8).mesh.triangles()),
+    ];
+    for (name, tris) in &scenes {
+        let scene = GpuScene::new(ctx, tris).unwrap();
+        let configs = [
+            GridConfig { kind: GridKind::Flat, ..GridConfig::default() },
+            GridConfig { kind: GridKind::Flat, resolution: Some(Resolution::Cubic(33)), ..GridConfig::default() },
+            GridConfig { kind: GridKind::Macrocell, ..GridConfig::default() },
+            GridConfig { kind: GridKind::Macrocell, macro_size: Some(4), ..GridConfig::default() },
+            GridConfig {
+                kind: GridKind::Macrocell,
+                macro_size: Some(8),
+                resolution: Some(Resolution::Cubic(50)),
+                ..GridConfig::default()
+            },
+        ];
+        for cfg in configs {
+            let (cpu, report) = structure::build(tris, &cfg).unwrap();
+            let g = builder.build(ctx, &scene, tris, &cfg).unwrap();
+            let back = builder.read_back(ctx, &g).unwrap();
+            assert_eq!(back, cpu, "{name} {cfg:?}");
+            assert_eq!(back.cells_digest(), cpu.cells_digest());
+            assert_eq!(g.macro_samples, report.macro_samples, "{name} {cfg:?}");
+            println!("{name} {} A={:?}: equal, digest {:016x}", cfg.kind, g.macrocells, back.cells_digest());
+        }
+        for cfg in [
+            GridConfig { kind: GridKind::Multires, ..GridConfig::default() },
+            GridConfig {
+                build: gridrt_grid::BuildOptions { insert: InsertMode::Exact, parallel: true },
+                ..GridConfig::default()
+            },
+        ] {
+            let e = builder.build(ctx, &scene, tris, &cfg).unwrap_err().to_string();
+            assert!(e.contains("use the CPU build"), "{e}");
+        }
     }
 }

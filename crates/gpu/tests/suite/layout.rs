@@ -43,7 +43,12 @@ fn rust_and_wgsl_structs_have_the_same_layout() {
         [light, diagonal, view, heat_max, width, height, depth_near, depth_far, first_pixel, pixel_count]
     );
     let build = naga::front::wgsl::parse_str(&compose("build_count.wgsl").unwrap()).unwrap();
-    check!(build, "BuildParams", BuildParams, [grid_min, inv_cell, res, triangle_count, margin, count, groups_x, pad]);
+    check!(
+        build,
+        "BuildParams",
+        BuildParams,
+        [grid_min, inv_cell, res, triangle_count, margin, count, groups_x, macro_edge]
+    );
     // The ray record is also the ray file's.
     assert_eq!(size_of::<GpuRay>(), size_of::<gridrt_scene::Ray>());
 }
