@@ -1,6 +1,9 @@
-// GPU grid build, phase 3a: exclusive prefix sum of one block of 512 elements per workgroup (two
-// per invocation, a Hillis–Steele scan of the pair sums in workgroup memory), in place; each
-// block's total goes to `block_sums` for the next level. Counts up to 2^31 references fit u32.
+// GPU grid build, phase 3a: exclusive prefix sum of one block of SCAN_BLOCK elements per
+// workgroup, in place: each invocation sums its run of SCAN_RUN consecutive elements, a
+// Hillis–Steele scan of the 256 run sums in workgroup memory gives each run its offset, and the
+// run is written back scanned. Each block's total goes to `block_sums` for the next level.
+// Counts up to 2^31 references fit u32. Long runs keep the barriers few (each is costly on a
+// CPU-emulated GPU).
 //!include shared/build.wgsl
 
 @group(0) @binding(0) var<uniform> params: BuildParams;
@@ -8,21 +11,20 @@
 @group(0) @binding(2) var<storage, read_write> block_sums: array<u32>;
 
 const SCAN_THREADS: u32 = 256u;
+const SCAN_RUN: u32 = 16u;
+const SCAN_BLOCK: u32 = 4096u;
 var<workgroup> sums: array<u32, 256>;
 
 @compute @workgroup_size(256)
 fn build_scan(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>) {
     let block = group_index(wid, params.groups_x);
-    let a = block * 2u * SCAN_THREADS + 2u * lid;
-    var x0 = 0u;
-    var x1 = 0u;
-    if a < params.count {
-        x0 = data[a];
+    let first = block * SCAN_BLOCK + lid * SCAN_RUN;
+    let end = min(first + SCAN_RUN, params.count);
+    var run = 0u;
+    for (var i = first; i < end; i++) {
+        run += data[i];
     }
-    if a + 1u < params.count {
-        x1 = data[a + 1u];
-    }
-    var s = x0 + x1;
+    var s = run;
     sums[lid] = s;
     workgroupBarrier();
     for (var off = 1u; off < SCAN_THREADS; off <<= 1u) {
@@ -35,14 +37,13 @@ fn build_scan(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) 
         sums[lid] = s;
         workgroupBarrier();
     }
-    let before = s - x0 - x1;
-    if a < params.count {
-        data[a] = before;
+    var acc = s - run;
+    for (var i = first; i < end; i++) {
+        let x = data[i];
+        data[i] = acc;
+        acc += x;
     }
-    if a + 1u < params.count {
-        data[a + 1u] = before + x0;
-    }
-    if lid == SCAN_THREADS - 1u && block * 2u * SCAN_THREADS < params.count {
+    if lid == SCAN_THREADS - 1u && block * SCAN_BLOCK < params.count {
         block_sums[block] = s;
     }
 }

@@ -137,7 +137,7 @@ pub struct AnimateArgs {
     pub grid: GridArgs,
     /// Where the rays are traced: cpu (all threads) or gpu (the structure's WGSL kernels).
     #[arg(long, value_enum, default_value = "cpu")]
-    pub backend: AnimateBackend,
+    pub backend: Device,
     /// Image size WIDTHxHEIGHT (one primary and one shadow ray per pixel).
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     pub size: (u32, u32),
@@ -152,8 +152,9 @@ pub struct AnimateArgs {
     pub json: bool,
 }
 
+/// Where a stage runs (`animate --backend`, `build --backend`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum AnimateBackend {
+pub enum Device {
     Cpu,
     Gpu,
 }
@@ -261,6 +262,10 @@ pub struct BuildArgs {
     pub scene: SceneArg,
     #[command(flatten)]
     pub grid: GridArgs,
+    /// Where the grid is built: cpu, or gpu (flat and macrocell grids with box insertion, through
+    /// WGSL kernels; bit-identical to the CPU build: compare `cells_digest`).
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub backend: Device,
     /// Print the result as JSON (includes the sampled cost curve).
     #[arg(long)]
     pub json: bool,

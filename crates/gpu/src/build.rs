@@ -1,6 +1,6 @@
 //! A flat grid built on the GPU, bit-identical to the CPU's: the scene's bounds
 //! (`build_bounds.wgsl`), per-cell counts (`build_count.wgsl`), their exclusive prefix sum
-//! (`build_scan.wgsl` per block of 512, block sums scanned recursively, `build_scan_add.wgsl`),
+//! (`build_scan.wgsl` per block of 4096, block sums scanned recursively, `build_scan_add.wgsl`),
 //! the scatter of triangle indices (`build_scatter.wgsl`) and each cell's references sorted
 //! (`build_sort_cells.wgsl`); for macrocells, the occupancy bits from the cell table
 //! (`build_occupancy.wgsl`, per candidate A when the cost model chooses A, as on the CPU).
@@ -27,8 +27,12 @@ use crate::upload::{GpuScene, GpuStructure};
 
 /// Invocations per workgroup of the per-triangle and per-cell passes (the WGSL's).
 const GROUP: u32 = 64;
-/// Elements one workgroup of the scan covers.
-const SCAN_BLOCK: u32 = 512;
+/// Workgroups of the bounds pass (each invocation folds every (groups × 64)-th triangle).
+const BOUNDS_GROUPS: u32 = 256;
+/// Elements one workgroup of the scan covers (build_scan.wgsl's SCAN_BLOCK).
+const SCAN_BLOCK: u32 = 4096;
+/// Cells each invocation of the sort pass covers (build_sort_cells.wgsl's SORT_RUN).
+const SORT_RUN: u32 = 16;
 /// Bytes of a u32.
 const WORD: u64 = 4;
 
@@ -285,7 +289,7 @@ impl GridBuilder {
         });
         let mut enc = Self::encoder(ctx, "grid build: bounds");
         let params = BuildParams { triangle_count: scene.triangle_count, ..Default::default() };
-        let groups = scene.triangle_count.div_ceil(GROUP);
+        let groups = scene.triangle_count.div_ceil(GROUP).clamp(1, BOUNDS_GROUPS);
         Self::pass(ctx, &mut enc, &self.bounds, "build_bounds", params, groups, &[&scene.triangles, &keys])?;
         let k = Self::submit_and_read(ctx, enc, &keys, 0, 6, "the scene bounds")?;
         let f = |key: u32| f32::from_bits(if key & 0x8000_0000 != 0 { key & 0x7FFF_FFFF } else { !key });
@@ -371,7 +375,7 @@ impl GridBuilder {
         times.record_since("scatter", start);
         let start = web_time::Instant::now();
         let mut enc = Self::encoder(ctx, "grid build: sort cells");
-        let groups = (cells as u32).div_ceil(GROUP);
+        let groups = (cells as u32).div_ceil(GROUP * SORT_RUN);
         Self::pass(ctx, &mut enc, &self.sort, "build_sort_cells", params, groups, &[&cell_start, &refs])?;
         ctx.queue.submit([enc.finish()]);
         wait(ctx)?;

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::build_grid;
-use crate::cli::{AnimateArgs, AnimateBackend};
+use crate::cli::{AnimateArgs, Device};
 use crate::lab::animation::{FixedView, shadow_rays};
 use crate::lab::report::{Chart, Series, progress, save_chart, write_rows};
 use gridrt_scene::Player;
@@ -74,8 +74,8 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let view = FixedView::new(&bounds, width, height);
     let (opts, shade, primary, trace_opts) = (view.opts, &view.shade, &view.primary, view.trace_options());
     let ctx = match args.backend {
-        AnimateBackend::Gpu => Some(super::gpu_context()?),
-        AnimateBackend::Cpu => None,
+        Device::Gpu => Some(super::gpu_context()?),
+        Device::Cpu => None,
     };
     for dir in [&args.frames_dir, &args.out].into_iter().flatten() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -153,8 +153,8 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         save_chart(out, "timeline", &timeline_chart(&source, cfg.kind.name(), &rows))?;
     }
     let backend = match args.backend {
-        AnimateBackend::Cpu => "cpu",
-        AnimateBackend::Gpu => "gpu",
+        Device::Cpu => "cpu",
+        Device::Gpu => "gpu",
     };
     if args.json {
         let t = Timeline {

@@ -1,16 +1,40 @@
 //! `gridrt build SCENE`: resolution, cells, references, empty cells, memory, nodes and levels,
-//! build ms per phase, and the sampled cost curve.
+//! build ms per phase, the sampled cost curve and the cells digest; on the CPU or the GPU.
 
 use serde_json::json;
 
+use gridrt_grid::BuildReport;
+
 use super::{build_grid, human_bytes};
-use crate::cli::BuildArgs;
+use crate::cli::{BuildArgs, Device};
 
 pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
     let tris = mesh.triangles();
     let cfg = args.grid.config()?;
-    let (_, b) = build_grid(&tris, &cfg)?;
+    let (grid, b, adapter) = match args.backend {
+        Device::Cpu => {
+            let (grid, b) = build_grid(&tris, &cfg)?;
+            (grid, b, None)
+        }
+        Device::Gpu => {
+            let ctx = super::gpu_context()?;
+            let builder = gridrt_gpu::build::GridBuilder::new(&ctx)?;
+            let scene = gridrt_gpu::upload::GpuScene::new(&ctx, &tris)?;
+            let g = builder.build(&ctx, &scene, &tris, &cfg)?;
+            let grid = builder.read_back(&ctx, &g)?;
+            let b = BuildReport {
+                kind: cfg.kind,
+                triangles: tris.len(),
+                resolution_choice: g.choice,
+                macro_samples: g.macro_samples,
+                times: g.times,
+                stats: grid.stats(tris.len()),
+            };
+            (grid, b, Some(ctx.adapter_name()))
+        }
+    };
+    let digest = format!("{:016x}", grid.cells_digest());
     let s = &b.stats;
     if args.json {
         let phases: serde_json::Map<String, serde_json::Value> =
@@ -19,6 +43,8 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
             "scene": report.source,
             "triangles": tris.len(),
             "grid": cfg.kind.name(),
+            "backend": format!("{:?}", args.backend).to_lowercase(),
+            "adapter": adapter,
             "config": cfg,
             "threads": if cfg.build.parallel { rayon::current_num_threads() } else { 1 },
             "resolution": s.resolution,
@@ -27,6 +53,7 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
             "depth_histogram": s.depth_histogram,
             "cells": s.cells,
             "refs": s.refs,
+            "cells_digest": digest,
             "empty_cells": s.empty_cells,
             "empty_percent": s.empty_percent(),
             "memory_bytes": s.memory_bytes,
@@ -45,7 +72,11 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
         "grid:         {}, {:?} insertion, {}",
         cfg.kind,
         cfg.build.insert,
-        if cfg.build.parallel { "parallel" } else { "serial" }
+        match (&adapter, cfg.build.parallel) {
+            (Some(a), _) => format!("built on the GPU ({a})"),
+            (None, true) => "parallel".to_string(),
+            (None, false) => "serial".to_string(),
+        }
     );
     let r = s.resolution;
     match &b.resolution_choice {
@@ -61,6 +92,7 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     }
     println!("cells:        {}", s.cells);
     println!("refs:         {} ({:.2} per triangle)", s.refs, s.refs as f64 / tris.len() as f64);
+    println!("cells digest: {digest}");
     println!("empty cells:  {} ({:.1}%)", s.empty_cells, 100.0 * s.empty_cells as f64 / s.cells.max(1) as f64);
     println!("memory:       {} ({:.1} bytes per triangle)", human_bytes(s.memory_bytes), s.memory_bytes_per_triangle);
     let phases: Vec<String> = b.times.0.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();

@@ -57,9 +57,11 @@ fn gpu_build_equals_the_cpu_build() {
         ("one triangle", vec![[Vec3::ZERO, Vec3::X, Vec3::Y]]),
     ];
     for (name, tris) in &scenes {
-        // 1 cell; a scan of one block; two levels; three levels (> 512² cells + 1).
+        // 1 cell; a scan of one block (4096 elements); two levels.
         check(name, tris, &[[1, 1, 1], [7, 5, 3], [64, 40, 50], [80, 70, 60]]);
     }
+    // Three scan levels: more than 4096² cells + 1.
+    check("one triangle, 17M cells", &scenes[5].1, &[[260, 256, 256]]);
 }
 
 #[test]
