@@ -83,6 +83,9 @@ pub struct AppArgs {
     /// Animated scene: start paused (it plays when it opens otherwise).
     #[arg(long)]
     pub paused: bool,
+    /// Build flat and macrocell grids on the GPU (overrides the saved setting).
+    #[arg(long)]
+    pub gpu_build: bool,
 }
 
 /// The app's extra windows.

@@ -646,6 +646,12 @@ fn app_screenshots_under_xvfb() {
     let (a, b) = (paused("0.3"), paused("2.1"));
     let differ = a.iter().zip(&b).filter(|(p, q)| p != q).count();
     assert!(differ * 100 > a.len(), "the poses at 0.3 s and 2.1 s look the same ({differ} pixels differ)");
+    // Rebuilt on the GPU every frame (the same grid; its stats show it was built there).
+    let png = out_dir.join("app-crowd-gpu-build.png");
+    let (good, log) = app(&["--screenshot", s(&png), "--frames", "5", "--gpu-build"]);
+    assert!(good && log.contains("structure built on the GPU"), "--gpu-build:\n{log}");
+    assert!(log.contains("animation: 5 frames shown") || log.contains("animation: 4 frames shown"), "{log}");
+    println!("{}", log.lines().find(|l| l.contains("saved")).unwrap_or_default());
     let (good, log) = app(&["--screenshot", s(&out_dir.join("app-crowd-bad.png")), "--animation", "nope"]);
     assert!(!good && log.contains("no animation \"nope\""), "an unknown clip must fail the run:\n{log}");
 

@@ -91,6 +91,11 @@ impl GridBuilder {
         })
     }
 
+    /// Whether the GPU builds `cfg`: flat and macrocell grids with box insertion.
+    pub fn supports(cfg: &GridConfig) -> bool {
+        matches!(cfg.kind, GridKind::Flat | GridKind::Macrocell) && cfg.build.insert == InsertMode::BoundingBox
+    }
+
     /// Builds `cfg` over the scene (whose CPU copy is `tris`, for the resolution choice): flat or
     /// macrocell grids with box insertion; other kinds and exact insertion are refused.
     pub fn build(
@@ -100,7 +105,7 @@ impl GridBuilder {
         tris: &[[Vec3; 3]],
         cfg: &GridConfig,
     ) -> Result<GpuGrid, GpuError> {
-        if !matches!(cfg.kind, GridKind::Flat | GridKind::Macrocell) || cfg.build.insert != InsertMode::BoundingBox {
+        if !GridBuilder::supports(cfg) {
             return Err(GpuError::Unsupported(format!(
                 "the GPU build makes flat and macrocell grids with box insertion (asked: {} with {:?} insertion); use the CPU build",
                 cfg.kind, cfg.build.insert

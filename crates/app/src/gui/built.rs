@@ -18,6 +18,57 @@ pub struct Built {
     pub in_worker: bool,
     /// The pose it was built over (`None`: the scene's rest pose).
     pub pose: Option<Posed>,
+    /// Built on the GPU: the structure (and the posed triangles) already on the device (taken
+    /// when it goes on screen).
+    pub on_gpu: Option<OnGpu>,
+    /// Built on the GPU (stays set).
+    pub gpu_built: bool,
+}
+
+/// What a GPU build leaves on the device, used as is.
+#[derive(Debug)]
+pub struct OnGpu {
+    pub structure: gridrt_gpu::upload::GpuStructure,
+    /// The triangles it was built over (posed ones for an animation frame).
+    pub scene: gridrt_gpu::upload::GpuScene,
+    /// Uploading the triangles, milliseconds.
+    pub upload_ms: f64,
+}
+
+/// The app's device and the grid build's pipelines, for builds on a job thread.
+#[derive(Clone, Debug)]
+pub struct GpuBuild {
+    pub ctx: gridrt_gpu::GpuContext,
+    pub builder: Arc<gridrt_gpu::build::GridBuilder>,
+}
+
+/// Builds `config` over `tris` on the GPU (flat or macrocell with box insertion; see
+/// [`gridrt_gpu::build`]) and reads it back for the stats panel and the measurements.
+#[cfg(not(target_arch = "wasm32"))]
+pub fn build_on_gpu(
+    gpu: &GpuBuild,
+    tris: &[[Vec3; 3]],
+    config: &GridConfig,
+    scene_generation: u64,
+) -> Result<Built, String> {
+    let what = |e: gridrt_gpu::GpuError| format!("building the {} grid on the GPU: {e}", config.kind);
+    let started = web_time::Instant::now();
+    let scene = gridrt_gpu::upload::GpuScene::new(&gpu.ctx, tris).map_err(what)?;
+    let upload_ms = started.elapsed().as_secs_f64() * 1e3;
+    let mut g = gpu.builder.build(&gpu.ctx, &scene, tris, config).map_err(what)?;
+    let start = web_time::Instant::now();
+    let grid = gpu.builder.read_back(&gpu.ctx, &g).map_err(what)?;
+    g.times.record_since("read back", start);
+    let report = BuildReport {
+        kind: config.kind,
+        triangles: tris.len(),
+        resolution_choice: g.choice,
+        macro_samples: g.macro_samples,
+        times: g.times,
+        stats: grid.stats(tris.len()),
+    };
+    let on_gpu = Some(OnGpu { structure: g.structure, scene, upload_ms });
+    Ok(Built { scene_generation, config: *config, grid, report, in_worker: false, pose: None, on_gpu, gpu_built: true })
 }
 
 /// A scene posed for one animation frame.
@@ -32,7 +83,16 @@ pub struct Posed {
 pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation: u64) -> Result<Built, String> {
     let (grid, report) =
         structure::build(tris, config).map_err(|e| format!("building the {} grid: {e}", config.kind))?;
-    Ok(Built { scene_generation, config: *config, grid, report, in_worker: false, pose: None })
+    Ok(Built {
+        scene_generation,
+        config: *config,
+        grid,
+        report,
+        in_worker: false,
+        pose: None,
+        on_gpu: None,
+        gpu_built: false,
+    })
 }
 
 /// A built structure as bytes: how the browser's build worker hands it to the page.

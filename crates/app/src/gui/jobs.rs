@@ -13,7 +13,7 @@ use gridrt_grid::GridConfig;
 
 #[cfg(target_arch = "wasm32")]
 use super::built::decode_structure;
-use super::built::{Built, Posed, build_structure};
+use super::built::{Built, GpuBuild, Posed, build_structure};
 use gridrt_scene::{Aabb, Clip, ClipTime, LoadReport, Player};
 use web_time::Instant;
 
@@ -109,6 +109,7 @@ pub fn spawn_pose_build(
     time: ClipTime,
     config: GridConfig,
     scene_generation: u64,
+    gpu: Option<GpuBuild>,
 ) -> Job<Result<Built, String>> {
     let pose = move || -> Result<Posed, String> {
         let started = Instant::now();
@@ -121,7 +122,7 @@ pub fn spawn_pose_build(
     #[cfg(target_arch = "wasm32")]
     {
         match pose() {
-            Ok(posed) => spawn_build(ui, posed.tris.clone(), config, scene_generation, Some(posed)),
+            Ok(posed) => spawn_build(ui, posed.tris.clone(), config, scene_generation, Some(posed), gpu),
             Err(e) => {
                 let (tx, rx) = channel();
                 let _ = tx.send(Err(e));
@@ -132,7 +133,7 @@ pub fn spawn_pose_build(
     #[cfg(not(target_arch = "wasm32"))]
     Job::spawn(format!("posing and building the {} grid", config.kind), ui, move || {
         let posed = pose()?;
-        let mut built = build_structure(&posed.tris, &config, scene_generation)?;
+        let mut built = build_here(&posed.tris, &config, scene_generation, gpu.as_ref())?;
         built.pose = Some(posed);
         Ok(built)
     })
@@ -147,6 +148,7 @@ pub fn spawn_build(
     config: GridConfig,
     scene_generation: u64,
     pose: Option<Posed>,
+    gpu: Option<GpuBuild>,
 ) -> Job<Result<Built, String>> {
     let what = format!("building the {} grid", config.kind);
     #[cfg(target_arch = "wasm32")]
@@ -162,6 +164,8 @@ pub fn spawn_build(
                 report,
                 in_worker: true,
                 pose: worker_pose,
+                on_gpu: None,
+                gpu_built: false,
             });
             let _ = tx.send(built);
             wake.request_repaint();
@@ -172,10 +176,27 @@ pub fn spawn_build(
         }
     }
     Job::spawn(what, ui, move || {
-        let mut built = build_structure(&tris, &config, scene_generation)?;
+        let mut built = build_here(&tris, &config, scene_generation, gpu.as_ref())?;
         built.pose = pose;
         Ok(built)
     })
+}
+
+/// Builds on this thread: on the GPU when asked and it builds `config` (natively), else on the
+/// CPU.
+fn build_here(
+    tris: &[[Vec3; 3]],
+    config: &GridConfig,
+    scene_generation: u64,
+    gpu: Option<&GpuBuild>,
+) -> Result<Built, String> {
+    #[cfg(not(target_arch = "wasm32"))]
+    if let Some(g) = gpu.filter(|_| gridrt_gpu::build::GridBuilder::supports(config)) {
+        return super::built::build_on_gpu(g, tris, config, scene_generation);
+    }
+    #[cfg(target_arch = "wasm32")]
+    let _ = gpu;
+    build_structure(tris, config, scene_generation)
 }
 
 /// One background job and its result channel.

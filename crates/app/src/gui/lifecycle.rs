@@ -105,19 +105,22 @@ impl GridrtApp {
         {
             let want = self.settings.grid;
             let pose = self.timeline.as_ref().map(|t| t.wanted()).filter(|_| scene.loaded.player.is_some());
-            let have = self
-                .built
-                .as_ref()
-                .map(|b| (b.built.scene_generation, b.built.config, b.built.pose.as_ref().map(|p| p.time)));
+            let on_gpu = self.gpu_build().is_some() && gridrt_gpu::build::GridBuilder::supports(&want);
+            let have = self.built.as_ref().map(|b| {
+                (b.built.scene_generation, b.built.config, b.built.pose.as_ref().map(|p| p.time), b.built.gpu_built)
+            });
             let failed = self.errors.build_failed(&want)
                 || pose.is_some_and(|p| self.timeline.as_ref().and_then(|t| t.failed) == Some(p));
-            if have != Some((scene.generation, want, pose)) && !failed {
+            if have != Some((scene.generation, want, pose, on_gpu)) && !failed {
                 self.errors.clear_build();
                 let generation = scene.generation;
                 self.posing = pose.is_some();
+                let gpu = self.gpu_build();
                 self.build_job = Some(match (pose, &scene.loaded.player) {
-                    (Some(time), Some(player)) => jobs::spawn_pose_build(ctx, player.clone(), time, want, generation),
-                    _ => jobs::spawn_build(ctx, scene.loaded.tris.clone(), want, generation, None),
+                    (Some(time), Some(player)) => {
+                        jobs::spawn_pose_build(ctx, player.clone(), time, want, generation, gpu)
+                    }
+                    _ => jobs::spawn_build(ctx, scene.loaded.tris.clone(), want, generation, None, gpu),
                 });
             }
         }
@@ -190,8 +193,26 @@ impl GridrtApp {
         Some(Timeline::new(clip, c.clamp(start.seconds.unwrap_or(c.start)), !start.paused))
     }
 
-    pub(super) fn set_built(&mut self, built: Built) {
+    /// The device to build on when the settings ask for GPU builds (native app only: the
+    /// build reads results back synchronously).
+    fn gpu_build(&self) -> Option<crate::gui::built::GpuBuild> {
+        if !self.settings.gpu_build || cfg!(target_arch = "wasm32") {
+            return None;
+        }
+        self.gpu.as_ref().map(|g| crate::gui::built::GpuBuild { ctx: g.ctx.clone(), builder: g.builder.clone() })
+    }
+
+    pub(super) fn set_built(&mut self, mut built: Built) {
         self.worker_builds += u64::from(built.in_worker);
+        if let Some(on_gpu) = built.on_gpu.take() {
+            // Built on the device: the structure and the triangles are used as they are.
+            let posed_gpu = built.pose.is_some().then_some(on_gpu.scene);
+            self.built_counter += 1;
+            let upload_ms = on_gpu.upload_ms;
+            self.built =
+                Some(BuiltState { built, gpu: Some(on_gpu.structure), posed_gpu, upload_ms, id: self.built_counter });
+            return;
+        }
         let started = web_time::Instant::now();
         let uploaded = match &self.gpu {
             Some(g) => {

@@ -164,6 +164,9 @@ impl GridrtApp {
         if let Some(r) = args.render_scale {
             settings.render_scale = r.clamp(0.05, 1.0);
         }
+        if args.gpu_build {
+            settings.gpu_build = true;
+        }
         if args.measure {
             settings.show_cost_plot = true;
         }

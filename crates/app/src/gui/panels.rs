@@ -116,6 +116,16 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
         ui.radio_value(&mut g.build.insert, InsertMode::Exact, "exact (SAT)");
     });
     ui.checkbox(&mut g.build.parallel, "parallel build");
+    if cfg!(not(target_arch = "wasm32")) {
+        let buildable = gridrt_gpu::build::GridBuilder::supports(g);
+        ui.checkbox(&mut s.gpu_build, "build on the GPU").on_hover_text(
+            "Flat and macrocell grids with box insertion are built by WGSL kernels on this device \
+             (bit-identical to the CPU build); other structures are built on the CPU.",
+        );
+        if s.gpu_build && !buildable {
+            ui.small(format!("{} with {:?} insertion: built on the CPU", g.kind, g.build.insert));
+        }
+    }
     match g.kind {
         GridKind::Macrocell => {
             let label = g.macro_size.map_or("auto (cost model)".to_string(), |a| a.to_string());
@@ -273,6 +283,17 @@ pub fn stats(
                 row("macrocell A", a.to_string());
             }
             row("memory", format!("{} ({:.1} B/tri)", human_bytes(st.memory_bytes), st.memory_bytes_per_triangle));
+            row(
+                "built on",
+                (if b.gpu_built {
+                    "the GPU"
+                } else if b.in_worker {
+                    "the build worker"
+                } else {
+                    "the CPU"
+                })
+                .into(),
+            );
             row("build ms", format!("{:.1}", b.report.times.total()));
             for (phase, ms) in &b.report.times.0 {
                 row(&format!("  {phase}"), format!("{ms:.1}"));

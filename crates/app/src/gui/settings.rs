@@ -22,6 +22,9 @@ pub struct Settings {
     pub heat_max: f32,
     /// Rendered pixels per screen pixel (the software adapter is slow: below 1 keeps it fluid).
     pub render_scale: f32,
+    /// Build flat and macrocell grids (box insertion) on the GPU (the native app; the result is
+    /// the CPU build's, bit for bit).
+    pub gpu_build: bool,
     pub show_cost_plot: bool,
     pub show_explainer: bool,
     pub explainer: super::explainer::ExplainerState,
@@ -36,6 +39,7 @@ impl Default for Settings {
             view: View::Shaded,
             heat_max: 64.0,
             render_scale: 0.5,
+            gpu_build: false,
             show_cost_plot: false,
             show_explainer: false,
             explainer: Default::default(),

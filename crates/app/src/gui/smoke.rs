@@ -40,6 +40,7 @@ impl GridrtApp {
     pub(super) fn smoke_step(&mut self, ctx: &egui::Context) {
         let frames_done = self.viewport.frames_done;
         let animation = self.animation_stats();
+        let on_gpu = self.built.as_ref().is_some_and(|b| b.built.gpu_built);
         let Some(s) = &mut self.smoke else { return };
         ctx.request_repaint();
         if s.started.elapsed().as_secs_f64() > SMOKE_TIMEOUT_S {
@@ -61,7 +62,7 @@ impl GridrtApp {
             .map(|()| {
                 let f = self.viewport.last;
                 format!(
-                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}{}",
+                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}{}{}",
                     w,
                     h,
                     s.path.display(),
@@ -73,6 +74,7 @@ impl GridrtApp {
                         f.mean_cells(),
                         f.mean_tests()
                     )),
+                    if on_gpu { "; structure built on the GPU" } else { "" },
                     match animation {
                         Some(a) => format!(
                             "; animation: {} frames shown, {} fps (pose {:.1}, build {:.1}, upload {:.1}, trace {:.1} ms)",

@@ -19,6 +19,8 @@ pub struct Gpu {
     pub egui: eframe::egui_wgpu::RenderState,
     /// To wake the UI when GPU work completes.
     pub ui: egui::Context,
+    /// The grid build's pipelines (natively: builds run on a job thread on this device).
+    pub builder: std::sync::Arc<gridrt_gpu::build::GridBuilder>,
 }
 
 impl std::fmt::Debug for Gpu {
@@ -31,7 +33,8 @@ impl Gpu {
     pub fn new(rs: &eframe::egui_wgpu::RenderState, ui: &egui::Context) -> Result<Gpu, GpuError> {
         let ctx = GpuContext::from_parts(rs.adapter.clone(), rs.device.clone(), rs.queue.clone());
         let renderer = Renderer::new(&ctx)?;
-        Ok(Gpu { ctx, renderer, egui: rs.clone(), ui: ui.clone() })
+        let builder = std::sync::Arc::new(gridrt_gpu::build::GridBuilder::new(&ctx)?);
+        Ok(Gpu { ctx, renderer, egui: rs.clone(), ui: ui.clone(), builder })
     }
 }
 
