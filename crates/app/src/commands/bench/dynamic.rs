@@ -66,8 +66,9 @@ enum Strategy {
     Grid(GridKind),
     #[cfg(feature = "peers")]
     Rebuild(super::peers::PeerKind),
+    /// A tree of this peer built once (its setup) and updated every frame.
     #[cfg(feature = "peers")]
-    Refit,
+    Refit(super::peers::PeerKind),
 }
 
 impl Strategy {
@@ -77,7 +78,7 @@ impl Strategy {
         if with_peers {
             use super::peers::PeerKind;
             v.extend([PeerKind::ObvhsFastest, PeerKind::ObvhsCwbvh, PeerKind::Bvh].map(Strategy::Rebuild));
-            v.push(Strategy::Refit);
+            v.extend([PeerKind::ObvhsMedium, PeerKind::Bvh].map(Strategy::Refit));
         }
         let _ = with_peers;
         v
@@ -86,7 +87,7 @@ impl Strategy {
     /// A tree built once and refit every frame (its first build is its setup).
     fn refit(self) -> bool {
         #[cfg(feature = "peers")]
-        return self == Strategy::Refit;
+        return matches!(self, Strategy::Refit(_));
         #[cfg(not(feature = "peers"))]
         false
     }
@@ -97,7 +98,9 @@ impl Strategy {
             #[cfg(feature = "peers")]
             Strategy::Rebuild(p) => p.name().into(),
             #[cfg(feature = "peers")]
-            Strategy::Refit => "obvhs BVH2 medium, refit".into(),
+            Strategy::Refit(super::peers::PeerKind::Bvh) => "bvh, update_shapes".into(),
+            #[cfg(feature = "peers")]
+            Strategy::Refit(p) => format!("{}, refit", p.name()),
         }
     }
 }
@@ -217,7 +220,7 @@ fn bench_scene(
     }
     let mut sums = vec![Totals::default(); strategies.len()];
     #[cfg(feature = "peers")]
-    let mut refit_tree: Option<super::peers::PeerBvh> = None;
+    let mut refit_trees: Vec<Option<super::peers::PeerBvh>> = strategies.iter().map(|_| None).collect();
     let mut pose_ms = 0.0;
     for k in 0..frames {
         pb.set_message(format!("{name} · frame {k}"));
@@ -238,12 +241,12 @@ fn bench_scene(
                 #[cfg(feature = "peers")]
                 Strategy::Rebuild(p) => Built::Peer(super::peers::build(p, tris)),
                 #[cfg(feature = "peers")]
-                Strategy::Refit => Built::Peer(match refit_tree.take() {
+                Strategy::Refit(p) => Built::Peer(match refit_trees[s].take() {
                     Some(mut tree) => {
                         tree.refit(tris);
                         tree
                     }
-                    None => super::peers::build(super::peers::PeerKind::ObvhsMedium, tris),
+                    None => super::peers::build(p, tris),
                 }),
             };
             let built_at = Instant::now();
@@ -270,8 +273,8 @@ fn bench_scene(
                 None => reference = Some((hits, shadow_hits)),
             }
             #[cfg(feature = "peers")]
-            if let (Strategy::Refit, Built::Peer(tree)) = (strategy, built) {
-                refit_tree = Some(tree);
+            if let (Strategy::Refit(_), Built::Peer(tree)) = (strategy, built) {
+                refit_trees[s] = Some(tree);
             }
         }
         pb.inc(1);

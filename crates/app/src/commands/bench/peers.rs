@@ -117,9 +117,16 @@ impl PeerKind {
     }
 }
 
+/// A triangle's box in `bvh`'s type.
+fn shape_bounds(t: &[Vec3; 3]) -> BvhAabb<f32, 3> {
+    let lo = t[0].min(t[1]).min(t[2]);
+    let hi = t[0].max(t[1]).max(t[2]);
+    BvhAabb::with_bounds(lo.to_array().into(), hi.to_array().into())
+}
+
 /// A triangle as a `bvh` shape: its index and the node the builder assigns.
 #[derive(Clone, Copy, Debug)]
-struct Shape {
+pub struct Shape {
     bounds: BvhAabb<f32, 3>,
     node: usize,
 }
@@ -143,7 +150,8 @@ impl BHShape<f32, 3> for Shape {
 pub enum PeerBvh {
     Bvh {
         bvh: Bvh<f32, 3>,
-        shapes: usize,
+        /// The triangles' boxes, each with its leaf (kept for `update_shapes`).
+        shapes: Vec<Shape>,
     },
     Bvh2(Bvh2),
     Cw {
@@ -169,16 +177,10 @@ pub fn build(kind: PeerKind, tris: &[[Vec3; 3]]) -> PeerBvh {
     let mut core = Duration::default();
     match kind {
         PeerKind::Bvh => {
-            let mut shapes: Vec<Shape> = tris
-                .iter()
-                .map(|t| {
-                    let lo = t[0].min(t[1]).min(t[2]);
-                    let hi = t[0].max(t[1]).max(t[2]);
-                    Shape { bounds: BvhAabb::with_bounds(lo.to_array().into(), hi.to_array().into()), node: 0 }
-                })
-                .collect();
+            let mut shapes: Vec<Shape> =
+                tris.iter().map(|t| Shape { bounds: shape_bounds(t), node: 0 }).collect();
             let bvh = Bvh::build_par(&mut shapes);
-            PeerBvh::Bvh { bvh, shapes: shapes.len() }
+            PeerBvh::Bvh { bvh, shapes }
         }
         PeerKind::ObvhsFastest | PeerKind::ObvhsMedium => {
             let params = if kind == PeerKind::ObvhsFastest {
@@ -252,7 +254,7 @@ impl PeerBvh {
         let v = |len: usize, size: usize| (len * size) as u64;
         match self {
             PeerBvh::Bvh { bvh, shapes } => {
-                v(bvh.nodes.len(), size_of::<BvhNode<f32, 3>>()) + v(*shapes, size_of::<Shape>())
+                v(bvh.nodes.len(), size_of::<BvhNode<f32, 3>>()) + v(shapes.len(), size_of::<Shape>())
             }
             PeerBvh::Bvh2(b) => {
                 v(b.nodes.len(), size_of::<obvhs::bvh2::node::Bvh2Node>())
@@ -268,10 +270,25 @@ impl PeerBvh {
         }
     }
 
-    /// Refits an obvhs BVH2 to its triangles moved in place (same order): every leaf's box from
-    /// its triangles, then the inner nodes bottom-up (`Bvh2::refit_all`). The tree keeps its
-    /// topology, so its quality decays as the triangles move. `false` for the other peers.
+    /// Updates the tree to its triangles moved in place (same order), with the library's own
+    /// update: obvhs BVH2 refits (every leaf's box from its triangles, then the inner nodes
+    /// bottom-up, `Bvh2::refit_all`: the topology stays, so quality decays as triangles move);
+    /// `bvh` re-inserts every triangle whose box changed (`Bvh::update_shapes`: each is removed
+    /// and added again, descending the tree). `false` for the other peers.
     pub fn refit(&mut self, tris: &[[Vec3; 3]]) -> bool {
+        if let PeerBvh::Bvh { bvh, shapes } = self {
+            let changed: Vec<usize> = tris
+                .iter()
+                .zip(shapes.iter_mut())
+                .enumerate()
+                .filter_map(|(i, (t, s))| {
+                    let b = shape_bounds(t);
+                    (b != s.bounds).then(|| s.bounds = b).map(|()| i)
+                })
+                .collect();
+            bvh.update_shapes(&changed, shapes);
+            return true;
+        }
         let PeerBvh::Bvh2(b) = self else { return false };
         let Bvh2 { nodes, primitive_indices, .. } = b;
         for node in nodes.iter_mut().filter(|n| n.is_leaf()) {
