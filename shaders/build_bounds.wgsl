@@ -1,11 +1,8 @@
 // GPU grid build, phase 1: the scene's bounds, folded into six global atomics through an
 // order-preserving map of floats to u32 (min and max are exact, so the bounds equal the CPU's;
 // the ±3e38 start values lose to any vertex, which the loader keeps within 1e30).
-//!include shared/types.wgsl
-//!include shared/build.wgsl
+//!include shared/build_triangles.wgsl
 
-@group(0) @binding(0) var<uniform> params: BuildParams;
-@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
 // min.xyz, max.xyz as order keys (see `order_key`); cleared to (MAX, MAX, MAX, 0, 0, 0).
 @group(0) @binding(2) var<storage, read_write> bounds: array<atomic<u32>, 6>;
 
@@ -29,8 +26,8 @@ fn build_bounds(
     var lo = vec3<f32>(3.0e38);
     var hi = vec3<f32>(-3.0e38);
     let stride = groups.x * groups.y * 64u;
-    for (var i = group_index(wid, params.groups_x) * 64u + lid; i < params.triangle_count; i += stride) {
-        let v = unpack_triangle(triangles[3u * i], triangles[3u * i + 1u], triangles[3u * i + 2u].x);
+    for (var i = triangle_index(lid, wid); i < params.triangle_count; i += stride) {
+        let v = triangle_vertices(i);
         lo = min(lo, min(min(v.a, v.b), v.c));
         hi = max(hi, max(max(v.a, v.b), v.c));
     }

@@ -1,26 +1,18 @@
 // GPU grid build, phase 4: every triangle writes its index into each of its cells' slots
 // (`cursor` starts as `cell_start`; the order within a cell is settled by build_sort_cells).
-//!include shared/types.wgsl
-//!include shared/build.wgsl
+//!include shared/build_triangles.wgsl
 
-@group(0) @binding(0) var<uniform> params: BuildParams;
-@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> cursor: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> refs: array<u32>;
 
 @compute @workgroup_size(64)
 fn build_scatter(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>) {
-    let i = group_index(wid, params.groups_x) * 64u + lid;
+    let i = triangle_index(lid, wid);
     if i >= params.triangle_count {
         return;
     }
-    let r = cell_range(unpack_triangle(triangles[3u * i], triangles[3u * i + 1u], triangles[3u * i + 2u].x), params);
-    for (var z = r.lo.z; z <= r.hi.z; z++) {
-        for (var y = r.lo.y; y <= r.hi.y; y++) {
-            let row = linear_cell(vec3<u32>(0u, y, z), params.res);
-            for (var x = r.lo.x; x <= r.hi.x; x++) {
-                refs[atomicAdd(&cursor[row + x], 1u)] = i;
-            }
-        }
+    let r = cell_range(triangle_vertices(i), params);
+    for (var k = 0u; k < range_cells(r); k++) {
+        refs[atomicAdd(&cursor[range_cell(r, k, params.res)], 1u)] = i;
     }
 }

@@ -56,6 +56,19 @@ fn cell_range(v: Vertices, p: BuildParams) -> CellRange {
     );
 }
 
+// Cells in the range.
+fn range_cells(r: CellRange) -> u32 {
+    let e = r.hi - r.lo + vec3<u32>(1u);
+    return e.x * e.y * e.z;
+}
+
+// The linear index of the range's k-th cell, x fastest (the CPU's insertion order).
+fn range_cell(r: CellRange, k: u32, res: vec3<u32>) -> u32 {
+    let e = r.hi - r.lo + vec3<u32>(1u);
+    let c = r.lo + vec3<u32>(k % e.x, (k / e.x) % e.y, k / (e.x * e.y));
+    return linear_cell(c, res);
+}
+
 // Linear cell index, x fastest (gridrt_grid::geometry::linear_index).
 fn linear_cell(c: vec3<u32>, res: vec3<u32>) -> u32 {
     return c.x + res.x * (c.y + res.y * c.z);

@@ -34,6 +34,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/closest_hit.wgsl", include_str!("../../../shaders/shared/closest_hit.wgsl")),
     ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
     ("shared/build.wgsl", include_str!("../../../shaders/shared/build.wgsl")),
+    ("shared/build_triangles.wgsl", include_str!("../../../shaders/shared/build_triangles.wgsl")),
 ];
 
 /// Error composing a shader: an unknown file or include.

@@ -177,8 +177,7 @@ pub fn build(kind: PeerKind, tris: &[[Vec3; 3]]) -> PeerBvh {
     let mut core = Duration::default();
     match kind {
         PeerKind::Bvh => {
-            let mut shapes: Vec<Shape> =
-                tris.iter().map(|t| Shape { bounds: shape_bounds(t), node: 0 }).collect();
+            let mut shapes: Vec<Shape> = tris.iter().map(|t| Shape { bounds: shape_bounds(t), node: 0 }).collect();
             let bvh = Bvh::build_par(&mut shapes);
             PeerBvh::Bvh { bvh, shapes }
         }
