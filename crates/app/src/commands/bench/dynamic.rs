@@ -222,10 +222,13 @@ fn bench_scene(
         .collect();
     #[cfg(feature = "peers")]
     if kept.len() < strategies.len() {
-        pb.println(format!(
-            "{name}: bvh update_shapes left out ({} triangles > {BVH_UPDATE_MAX_TRIANGLES}: it re-inserts every moved triangle one by one)",
-            player.tris.len()
-        ));
+        // On stderr even when the progress bar is hidden (not a terminal).
+        pb.suspend(|| {
+            eprintln!(
+                "{name}: bvh update_shapes left out ({} triangles > {BVH_UPDATE_MAX_TRIANGLES}: it re-inserts every moved triangle one by one)",
+                player.tris.len()
+            )
+        });
     }
     #[cfg(feature = "peers")]
     let strategies = &kept[..];
