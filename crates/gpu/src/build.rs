@@ -22,7 +22,7 @@ use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
 use crate::layout::{BuildParams, GridParams};
-use crate::trace::{pipeline, read_back};
+use crate::trace::{pipeline, read_back_async};
 use crate::upload::{GpuScene, GpuStructure};
 
 /// Invocations per workgroup of the per-triangle and per-cell passes (the WGSL's).
@@ -98,7 +98,7 @@ impl GridBuilder {
 
     /// Builds `cfg` over the scene (whose CPU copy is `tris`, for the resolution choice): flat or
     /// macrocell grids with box insertion; other kinds and exact insertion are refused.
-    pub fn build(
+    pub async fn build_async(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
@@ -113,7 +113,7 @@ impl GridBuilder {
         }
         let mut times = PhaseTimes::default();
         let start = web_time::Instant::now();
-        let bounds = self.bounds(ctx, scene)?;
+        let bounds = self.bounds_async(ctx, scene).await?;
         times.record_since("bounds", start);
         let policy = cfg.resolution.unwrap_or(Resolution::Auto);
         let choice = times.record("resolution", || {
@@ -121,8 +121,8 @@ impl GridBuilder {
         });
         check_cells(choice.resolution, cfg.cost.max_cells)?;
         let mut g = match cfg.kind {
-            GridKind::Macrocell => self.build_macrocell(ctx, scene, &bounds, choice.resolution, cfg.macro_size)?,
-            _ => self.build_flat(ctx, scene, GridGeometry::new(&bounds, choice.resolution))?,
+            GridKind::Macrocell => self.macrocell_async(ctx, scene, &bounds, choice.resolution, cfg.macro_size).await?,
+            _ => self.flat_async(ctx, scene, GridGeometry::new(&bounds, choice.resolution)).await?,
         };
         times.0.append(&mut g.times.0);
         g.times = times;
@@ -156,7 +156,7 @@ impl GridBuilder {
 
     /// Macrocells over a fine grid at `res` rounded up to multiples of A: A as given, or chosen
     /// by the cost model from a probe grid (as `MacrocellGrid::build` does on the CPU).
-    pub fn build_macrocell(
+    pub async fn macrocell_async(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
@@ -170,15 +170,16 @@ impl GridBuilder {
                 (a, Vec::new(), None)
             }
             None => {
-                let probe =
-                    self.build_flat(ctx, scene, GridGeometry::new(bounds, fine_resolution(res, PROBE_MULTIPLE)))?;
+                let probe = self
+                    .flat_async(ctx, scene, GridGeometry::new(bounds, fine_resolution(res, PROBE_MULTIPLE)))
+                    .await?;
                 let start = web_time::Instant::now();
                 let mut samples = Vec::new();
                 for a in MACRO_SIZES {
                     let mut enc = Self::encoder(ctx, "grid build: macrocell sample");
                     let (macro_res, bits) = self.occupancy(ctx, &mut enc, &probe, a)?;
                     let words = bits.size() / WORD;
-                    let occ = Self::submit_and_read(ctx, enc, &bits, 0, words, "the macrocell occupancy")?;
+                    let occ = Self::submit_and_read(ctx, enc, &bits, 0, words, "the macrocell occupancy").await?;
                     samples.push(MacroSample::from_occupancy(a, macro_res, &occ));
                 }
                 let mut probe = probe;
@@ -190,13 +191,13 @@ impl GridBuilder {
         let mut fine = match probe {
             Some(f) if f.geom.res.to_array() == target => f,
             Some(f) => {
-                let mut g = self.build_flat(ctx, scene, GridGeometry::new(bounds, target))?;
+                let mut g = self.flat_async(ctx, scene, GridGeometry::new(bounds, target)).await?;
                 let mut t = f.times;
                 t.0.append(&mut g.times.0);
                 g.times = t;
                 g
             }
-            None => self.build_flat(ctx, scene, GridGeometry::new(bounds, target))?,
+            None => self.flat_async(ctx, scene, GridGeometry::new(bounds, target)).await?,
         };
         let start = web_time::Instant::now();
         let mut enc = Self::encoder(ctx, "grid build: occupancy");
@@ -262,7 +263,7 @@ impl GridBuilder {
         }))
     }
 
-    fn submit_and_read(
+    async fn submit_and_read(
         ctx: &GpuContext,
         mut enc: wgpu::CommandEncoder,
         src: &wgpu::Buffer,
@@ -278,7 +279,7 @@ impl GridBuilder {
         )?;
         enc.copy_buffer_to_buffer(src, offset, &read, 0, words * WORD);
         ctx.queue.submit([enc.finish()]);
-        read_back(ctx, &read, words * WORD, what)
+        read_back_async(ctx, &read, words * WORD, what).await
     }
 
     fn encoder(ctx: &GpuContext, label: &'static str) -> wgpu::CommandEncoder {
@@ -286,7 +287,7 @@ impl GridBuilder {
     }
 
     /// The bounds of the scene's triangles (exactly the CPU's: min and max are exact).
-    pub fn bounds(&self, ctx: &GpuContext, scene: &GpuScene) -> Result<Aabb, GpuError> {
+    pub async fn bounds_async(&self, ctx: &GpuContext, scene: &GpuScene) -> Result<Aabb, GpuError> {
         let keys = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("grid build bounds"),
             contents: bytemuck::cast_slice(&[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0]),
@@ -296,7 +297,7 @@ impl GridBuilder {
         let params = BuildParams { triangle_count: scene.triangle_count, ..Default::default() };
         let groups = scene.triangle_count.div_ceil(GROUP).clamp(1, BOUNDS_GROUPS);
         Self::pass(ctx, &mut enc, &self.bounds, "build_bounds", params, groups, &[&scene.triangles, &keys])?;
-        let k = Self::submit_and_read(ctx, enc, &keys, 0, 6, "the scene bounds")?;
+        let k = Self::submit_and_read(ctx, enc, &keys, 0, 6, "the scene bounds").await?;
         let f = |key: u32| f32::from_bits(if key & 0x8000_0000 != 0 { key & 0x7FFF_FFFF } else { !key });
         Ok(Aabb { min: glam::Vec3::new(f(k[0]), f(k[1]), f(k[2])), max: glam::Vec3::new(f(k[3]), f(k[4]), f(k[5])) })
     }
@@ -323,7 +324,12 @@ impl GridBuilder {
     }
 
     /// Builds the flat grid `geom` over the scene's triangles (box insertion).
-    pub fn build_flat(&self, ctx: &GpuContext, scene: &GpuScene, geom: GridGeometry) -> Result<GpuGrid, GpuError> {
+    pub async fn flat_async(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        geom: GridGeometry,
+    ) -> Result<GpuGrid, GpuError> {
         let mut times = PhaseTimes::default();
         let cells = geom.cell_count();
         let n = scene.triangle_count;
@@ -351,7 +357,8 @@ impl GridBuilder {
             &[&scene.triangles, &cell_start],
         )?;
         self.scan(ctx, &mut enc, &cell_start, cells + 1)?;
-        let total = Self::submit_and_read(ctx, enc, &cell_start, cells * WORD, 1, "the reference count")?[0] as u64;
+        let total =
+            Self::submit_and_read(ctx, enc, &cell_start, cells * WORD, 1, "the reference count").await?[0] as u64;
         times.record_since("count + scan", start);
         if total > MAX_REFS {
             return Err(GpuError::Unsupported(format!("{total} references, more than the limit of {MAX_REFS}")));
@@ -412,7 +419,7 @@ impl GridBuilder {
     }
 
     /// The grid read back into the CPU's form.
-    pub fn read_back(&self, ctx: &GpuContext, grid: &GpuGrid) -> Result<AnyGrid, GpuError> {
+    pub async fn read_back_async(&self, ctx: &GpuContext, grid: &GpuGrid) -> Result<AnyGrid, GpuError> {
         let cell_start = Self::submit_and_read(
             ctx,
             Self::encoder(ctx, "grid readback"),
@@ -420,7 +427,8 @@ impl GridBuilder {
             0,
             grid.cells + 1,
             "the cells",
-        )?;
+        )
+        .await?;
         let refs = if grid.refs == 0 {
             Vec::new()
         } else {
@@ -431,14 +439,16 @@ impl GridBuilder {
                 0,
                 grid.refs,
                 "the refs",
-            )?
+            )
+            .await?
         };
         let fine = FlatGrid::new(grid.geom, cell_start, refs);
         Ok(match (grid.macrocells, &grid.structure.extra) {
             (Some((a, macro_res)), Some(bits)) => {
                 let words = bits.size() / WORD;
                 let occupancy =
-                    Self::submit_and_read(ctx, Self::encoder(ctx, "grid readback"), bits, 0, words, "the occupancy")?;
+                    Self::submit_and_read(ctx, Self::encoder(ctx, "grid readback"), bits, 0, words, "the occupancy")
+                        .await?;
                 AnyGrid::Macrocell(MacrocellGrid { fine, a, macro_res, occupancy })
             }
             _ => AnyGrid::Flat(fine),
@@ -446,8 +456,45 @@ impl GridBuilder {
     }
 }
 
-/// Waits until the queue is idle.
+/// Blocking forms of the build (native only; a browser cannot wait for the GPU).
+#[cfg(not(target_arch = "wasm32"))]
+impl GridBuilder {
+    /// [`GridBuilder::build_async`], blocking.
+    pub fn build(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        tris: &[[Vec3; 3]],
+        cfg: &GridConfig,
+    ) -> Result<GpuGrid, GpuError> {
+        pollster::block_on(self.build_async(ctx, scene, tris, cfg))
+    }
+
+    /// [`GridBuilder::bounds_async`], blocking.
+    pub fn bounds(&self, ctx: &GpuContext, scene: &GpuScene) -> Result<Aabb, GpuError> {
+        pollster::block_on(self.bounds_async(ctx, scene))
+    }
+
+    /// [`GridBuilder::flat_async`], blocking.
+    pub fn build_flat(&self, ctx: &GpuContext, scene: &GpuScene, geom: GridGeometry) -> Result<GpuGrid, GpuError> {
+        pollster::block_on(self.flat_async(ctx, scene, geom))
+    }
+
+    /// [`GridBuilder::read_back_async`], blocking.
+    pub fn read_back(&self, ctx: &GpuContext, grid: &GpuGrid) -> Result<AnyGrid, GpuError> {
+        pollster::block_on(self.read_back_async(ctx, grid))
+    }
+}
+
+/// Waits until the queue is idle (natively; in a browser the passes just queue, and the phase
+/// times measure their submission).
 fn wait(ctx: &GpuContext) -> Result<(), GpuError> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = ctx;
+        Ok(())
+    }
+    #[cfg(not(target_arch = "wasm32"))]
     ctx.device
         .poll(wgpu::PollType::wait_indefinitely())
         .map(|_| ())

@@ -3,7 +3,7 @@
 //! processed in chunks that fit the device limits.
 
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use gridrt_grid::{RayStats, Traversal};
 use gridrt_scene::{Hit, Ray};
@@ -267,6 +267,62 @@ pub fn read_back<T: bytemuck::Pod>(
     drop(view);
     buffer.unmap();
     Ok(out)
+}
+
+/// [`read_back`] without blocking: natively the device is polled until the map completes; in a
+/// browser the future resolves when the browser has mapped the buffer.
+pub async fn read_back_async<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    size: u64,
+    what: &'static str,
+) -> Result<Vec<T>, GpuError> {
+    let err = |e: &dyn std::fmt::Display| GpuError::Readback { what, detail: e.to_string() };
+    let slice = buffer.slice(..size);
+    let state: Arc<Mutex<MapState>> = Default::default();
+    let done = state.clone();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        if let Ok(mut s) = done.lock() {
+            s.result = Some(r);
+            if let Some(w) = s.waker.take() {
+                w.wake();
+            }
+        }
+    });
+    #[cfg(not(target_arch = "wasm32"))]
+    ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| err(&e))?;
+    #[cfg(target_arch = "wasm32")]
+    let _ = ctx;
+    MapFuture(state).await.map_err(|e| err(&e))?;
+    let view = slice.get_mapped_range().map_err(|e| err(&e))?;
+    let out = bytemuck::cast_slice(&view).to_vec();
+    drop(view);
+    buffer.unmap();
+    Ok(out)
+}
+
+/// A buffer mapping's outcome and the task waiting for it.
+#[derive(Default)]
+struct MapState {
+    result: Option<Result<(), wgpu::BufferAsyncError>>,
+    waker: Option<std::task::Waker>,
+}
+
+/// Resolves when `map_async`'s callback has run.
+struct MapFuture(Arc<Mutex<MapState>>);
+
+impl std::future::Future for MapFuture {
+    type Output = Result<(), wgpu::BufferAsyncError>;
+    fn poll(self: std::pin::Pin<&mut Self>, cx: &mut std::task::Context<'_>) -> std::task::Poll<Self::Output> {
+        let Ok(mut s) = self.0.lock() else { return std::task::Poll::Ready(Err(wgpu::BufferAsyncError)) };
+        match s.result.take() {
+            Some(r) => std::task::Poll::Ready(r),
+            None => {
+                s.waker = Some(cx.waker().clone());
+                std::task::Poll::Pending
+            }
+        }
+    }
 }
 
 /// Maps the first `size` bytes of each MAP_READ buffer for reading, waiting once for all of

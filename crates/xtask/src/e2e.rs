@@ -420,6 +420,25 @@ fn drive(
     );
     let worker_frames = a["worker_builds"].as_u64().unwrap_or(0).saturating_sub(workers_before);
     ensure!(worker_frames >= ANIMATION_FRAMES, "only {worker_frames} animation frames were built in the worker");
+    // Built on the GPU instead (the page awaits the build's readbacks): frames keep coming.
+    let shown = anim["frames_shown"].as_u64().unwrap_or(0);
+    page.eval("window.gridrt.set_gpu_build('on'); true")?;
+    let g = page.wait_for(
+        "animation frames built on the GPU",
+        &format!(
+            "(() => {{ const s = window.gridrt.stats(); if (s.error) throw new Error('the app reports: ' + s.error); \
+               return s.gpu_built && s.animation.frames_shown >= {} ? s : null; }})()",
+            shown + ANIMATION_FRAMES
+        ),
+        timeout,
+    )?;
+    println!(
+        "web-test: e2e-crowd.glb rebuilt on the GPU: {} frames shown, {:.2} fps (build {:.1} ms)",
+        g["animation"]["frames_shown"],
+        g["animation"]["fps"].as_f64().unwrap_or(0.0),
+        g["animation"]["build_ms"].as_f64().unwrap_or(0.0)
+    );
+    page.eval("window.gridrt.set_gpu_build('off'); true")?;
     // Paused and moved, it settles on the pose asked for.
     page.eval("window.gridrt.set_playing('pause'); window.gridrt.seek('1.25'); true")?;
     let paused = wait_idle(

@@ -43,9 +43,10 @@ pub struct GpuBuild {
 }
 
 /// Builds `config` over `tris` on the GPU (flat or macrocell with box insertion; see
-/// [`gridrt_gpu::build`]) and reads it back for the stats panel and the measurements.
-#[cfg(not(target_arch = "wasm32"))]
-pub fn build_on_gpu(
+/// [`gridrt_gpu::build`]) and reads it back for the stats panel and the measurements. Natively
+/// it runs to the end on a job thread ([`build_on_gpu`]); in a browser it is awaited on the
+/// page (the readbacks resolve between frames).
+pub async fn build_on_gpu_async(
     gpu: &GpuBuild,
     tris: &[[Vec3; 3]],
     config: &GridConfig,
@@ -55,9 +56,9 @@ pub fn build_on_gpu(
     let started = web_time::Instant::now();
     let scene = gridrt_gpu::upload::GpuScene::new(&gpu.ctx, tris).map_err(what)?;
     let upload_ms = started.elapsed().as_secs_f64() * 1e3;
-    let mut g = gpu.builder.build(&gpu.ctx, &scene, tris, config).map_err(what)?;
+    let mut g = gpu.builder.build_async(&gpu.ctx, &scene, tris, config).await.map_err(what)?;
     let start = web_time::Instant::now();
-    let grid = gpu.builder.read_back(&gpu.ctx, &g).map_err(what)?;
+    let grid = gpu.builder.read_back_async(&gpu.ctx, &g).await.map_err(what)?;
     g.times.record_since("read back", start);
     let report = BuildReport {
         kind: config.kind,
@@ -69,6 +70,17 @@ pub fn build_on_gpu(
     };
     let on_gpu = Some(OnGpu { structure: g.structure, scene, upload_ms });
     Ok(Built { scene_generation, config: *config, grid, report, in_worker: false, pose: None, on_gpu, gpu_built: true })
+}
+
+/// [`build_on_gpu_async`] on this (job) thread, blocking.
+#[cfg(not(target_arch = "wasm32"))]
+pub fn build_on_gpu(
+    gpu: &GpuBuild,
+    tris: &[[Vec3; 3]],
+    config: &GridConfig,
+    scene_generation: u64,
+) -> Result<Built, String> {
+    pollster::block_on(build_on_gpu_async(gpu, tris, config, scene_generation))
 }
 
 /// A scene posed for one animation frame.

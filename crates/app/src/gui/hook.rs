@@ -42,6 +42,8 @@ pub struct HookStats {
     pub building: bool,
     /// Structures built so far by the browser's build worker.
     pub worker_builds: u64,
+    /// The structure on screen was built on the GPU.
+    pub gpu_built: bool,
     /// No load or build running, no frame in flight, the last frame shows the current settings
     /// and no command is waiting.
     pub idle: bool,
@@ -94,6 +96,8 @@ pub enum HookCommand {
     Playing(bool),
     /// Move the timeline to this clip time (seconds).
     Seek(f64),
+    /// Build flat and macrocell grids on the GPU (or not).
+    GpuBuild(bool),
 }
 
 impl HookCommand {
@@ -115,6 +119,13 @@ impl HookCommand {
             "true" | "play" => Ok(HookCommand::Playing(true)),
             "false" | "pause" => Ok(HookCommand::Playing(false)),
             _ => Err(format!("{s:?}: expected play or pause")),
+        }
+    }
+    pub fn gpu_build(s: &str) -> Result<HookCommand, String> {
+        match s {
+            "on" | "true" => Ok(HookCommand::GpuBuild(true)),
+            "off" | "false" => Ok(HookCommand::GpuBuild(false)),
+            _ => Err(format!("{s:?}: expected on or off")),
         }
     }
     pub fn seek(s: &str) -> Result<HookCommand, String> {
@@ -197,6 +208,8 @@ mod tests {
         assert!(HookCommand::playing("maybe").unwrap_err().contains("play or pause"));
         assert_eq!(HookCommand::seek(" 1.5"), Ok(HookCommand::Seek(1.5)));
         assert!(HookCommand::seek("NaN").is_err());
+        assert_eq!(HookCommand::gpu_build("on"), Ok(HookCommand::GpuBuild(true)));
+        assert!(HookCommand::gpu_build("maybe").is_err());
     }
 
     #[test]

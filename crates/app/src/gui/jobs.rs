@@ -151,6 +151,19 @@ pub fn spawn_build(
     gpu: Option<GpuBuild>,
 ) -> Job<Result<Built, String>> {
     let what = format!("building the {} grid", config.kind);
+    // In the browser a GPU build is awaited on the page: its passes run on the device and its
+    // readbacks resolve between frames.
+    #[cfg(target_arch = "wasm32")]
+    if let Some(g) = gpu.filter(|_| gridrt_gpu::build::GridBuilder::supports(&config)) {
+        let (tx, rx) = channel();
+        let wake = ui.clone();
+        wasm_bindgen_futures::spawn_local(async move {
+            let built = super::built::build_on_gpu_async(&g, &tris, &config, scene_generation).await;
+            let _ = tx.send(built.map(|b| Built { pose, ..b }));
+            wake.request_repaint();
+        });
+        return Job { rx, started: Instant::now(), what: format!("building the {} grid on the GPU", config.kind) };
+    }
     #[cfg(target_arch = "wasm32")]
     {
         let (tx, rx) = channel();

@@ -193,10 +193,9 @@ impl GridrtApp {
         Some(Timeline::new(clip, c.clamp(start.seconds.unwrap_or(c.start)), !start.paused))
     }
 
-    /// The device to build on when the settings ask for GPU builds (native app only: the
-    /// build reads results back synchronously).
+    /// The device to build on when the settings ask for GPU builds.
     fn gpu_build(&self) -> Option<crate::gui::built::GpuBuild> {
-        if !self.settings.gpu_build || cfg!(target_arch = "wasm32") {
+        if !self.settings.gpu_build {
             return None;
         }
         self.gpu.as_ref().map(|g| crate::gui::built::GpuBuild { ctx: g.ctx.clone(), builder: g.builder.clone() })

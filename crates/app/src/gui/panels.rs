@@ -116,15 +116,13 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
         ui.radio_value(&mut g.build.insert, InsertMode::Exact, "exact (SAT)");
     });
     ui.checkbox(&mut g.build.parallel, "parallel build");
-    if cfg!(not(target_arch = "wasm32")) {
-        let buildable = gridrt_gpu::build::GridBuilder::supports(g);
-        ui.checkbox(&mut s.gpu_build, "build on the GPU").on_hover_text(
-            "Flat and macrocell grids with box insertion are built by WGSL kernels on this device \
-             (bit-identical to the CPU build); other structures are built on the CPU.",
-        );
-        if s.gpu_build && !buildable {
-            ui.small(format!("{} with {:?} insertion: built on the CPU", g.kind, g.build.insert));
-        }
+    let buildable = gridrt_gpu::build::GridBuilder::supports(g);
+    ui.checkbox(&mut s.gpu_build, "build on the GPU").on_hover_text(
+        "Flat and macrocell grids with box insertion are built by WGSL kernels on this device \
+         (bit-identical to the CPU build); other structures are built on the CPU.",
+    );
+    if s.gpu_build && !buildable {
+        ui.small(format!("{} with {:?} insertion: built on the CPU", g.kind, g.build.insert));
     }
     match g.kind {
         GridKind::Macrocell => {

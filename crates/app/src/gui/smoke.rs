@@ -134,6 +134,7 @@ impl GridrtApp {
                         t.toggle(&s.loaded.clips[t.clip]);
                     }
                 }
+                HookCommand::GpuBuild(on) => self.settings.gpu_build = on,
                 HookCommand::Seek(seconds) => {
                     if let (Some(t), Some(s)) = (&mut self.timeline, &self.scene) {
                         t.seconds = s.loaded.clips[t.clip].clamp(seconds);
@@ -223,6 +224,7 @@ impl GridrtApp {
             build_ms: built.map_or(0.0, |b| b.report.times.total()),
             building: self.build_job.is_some(),
             worker_builds: self.worker_builds,
+            gpu_built: built.is_some_and(|b| b.gpu_built),
             idle: self.idle() && self.captures.is_empty() && self.capture.is_none(),
             error: self.errors.joined(),
             first_frame_ms: self.first_frame_ms,

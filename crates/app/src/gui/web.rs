@@ -7,6 +7,7 @@
 //!   `set_camera("ex,ey,ez,tx,ty,tz,fov")`, `set_frame_size(w, h)` (0, 0 follows the window):
 //!   throw on a bad value;
 //! - `set_playing("play"|"pause")`, `seek("seconds")`: the animated scene's timeline;
+//! - `set_gpu_build("on"|"off")`: build flat and macrocell grids on the GPU;
 //! - `open_bytes(name, Uint8Array)`: opens a .glb/.gltf as a dropped file would;
 //! - `dismiss_error()`: clears the error the UI shows (like its "dismiss" button);
 //! - `capture()` → id; then `last_frame()` → `{id, width, height, rgba: Uint8Array}` or null;
@@ -46,13 +47,14 @@ pub fn install(hook: Hook, runner: eframe::WebRunner) {
     set(&obj, "stats", f.as_ref());
     f.forget();
 
-    let setters: [(&str, fn(&str) -> Result<HookCommand, String>); 6] = [
+    let setters: [(&str, fn(&str) -> Result<HookCommand, String>); 7] = [
         ("set_grid", HookCommand::grid),
         ("set_view", HookCommand::view),
         ("set_traversal", HookCommand::traversal),
         ("set_camera", HookCommand::camera),
         ("set_playing", HookCommand::playing),
         ("seek", HookCommand::seek),
+        ("set_gpu_build", HookCommand::gpu_build),
     ];
     for (name, parse) in setters {
         let h = hook.clone();
