@@ -154,7 +154,7 @@ pub fn spawn_build(
     // In the browser a GPU build is awaited on the page: its passes run on the device and its
     // readbacks resolve between frames.
     #[cfg(target_arch = "wasm32")]
-    if let Some(g) = gpu.filter(|_| gridrt_gpu::build::GridBuilder::supports(&config)) {
+    if let Some(g) = gpu.as_ref().filter(|_| gridrt_gpu::build::GridBuilder::supports(&config)).cloned() {
         let (tx, rx) = channel();
         let wake = ui.clone();
         wasm_bindgen_futures::spawn_local(async move {
