@@ -420,9 +420,10 @@ fn drive(
     );
     let worker_frames = a["worker_builds"].as_u64().unwrap_or(0).saturating_sub(workers_before);
     ensure!(worker_frames >= ANIMATION_FRAMES, "only {worker_frames} animation frames were built in the worker");
-    // Built on the GPU instead (the page awaits the build's readbacks): frames keep coming.
+    // Built on the GPU instead (a flat grid; the page awaits the build's readbacks): frames keep
+    // coming.
     let shown = anim["frames_shown"].as_u64().unwrap_or(0);
-    page.eval("window.gridrt.set_gpu_build('on'); true")?;
+    page.eval("window.gridrt.set_grid('flat'); window.gridrt.set_gpu_build('on'); true")?;
     let g = page.wait_for(
         "animation frames built on the GPU",
         &format!(
