@@ -14,15 +14,34 @@ pub struct Built {
     pub config: GridConfig,
     pub grid: AnyGrid,
     pub report: BuildReport,
-    /// Built by the browser's build worker (not on the page's or the app's thread).
-    pub in_worker: bool,
+    /// Where it was built.
+    pub built_on: BuiltOn,
     /// The pose it was built over (`None`: the scene's rest pose).
     pub pose: Option<Posed>,
     /// Built on the GPU: the structure (and the posed triangles) already on the device (taken
     /// when it goes on screen).
     pub on_gpu: Option<OnGpu>,
-    /// Built on the GPU (stays set).
-    pub gpu_built: bool,
+}
+
+/// Where a structure was built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuiltOn {
+    /// On the CPU, on a thread of this process (the app's job thread, or the page's thread).
+    Cpu,
+    /// On the CPU, in the browser's build worker.
+    Worker,
+    /// By the WGSL build kernels.
+    Gpu,
+}
+
+impl BuiltOn {
+    pub fn name(self) -> &'static str {
+        match self {
+            BuiltOn::Cpu => "the CPU",
+            BuiltOn::Worker => "the build worker",
+            BuiltOn::Gpu => "the GPU",
+        }
+    }
 }
 
 /// What a GPU build leaves on the device, used as is.
@@ -69,7 +88,7 @@ pub async fn build_on_gpu_async(
         stats: grid.stats(tris.len()),
     };
     let on_gpu = Some(OnGpu { structure: g.structure, scene, upload_ms });
-    Ok(Built { scene_generation, config: *config, grid, report, in_worker: false, pose: None, on_gpu, gpu_built: true })
+    Ok(Built { scene_generation, config: *config, grid, report, built_on: BuiltOn::Gpu, pose: None, on_gpu })
 }
 
 /// [`build_on_gpu_async`] on this (job) thread, blocking.
@@ -95,16 +114,7 @@ pub struct Posed {
 pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation: u64) -> Result<Built, String> {
     let (grid, report) =
         structure::build(tris, config).map_err(|e| format!("building the {} grid: {e}", config.kind))?;
-    Ok(Built {
-        scene_generation,
-        config: *config,
-        grid,
-        report,
-        in_worker: false,
-        pose: None,
-        on_gpu: None,
-        gpu_built: false,
-    })
+    Ok(Built { scene_generation, config: *config, grid, report, built_on: BuiltOn::Cpu, pose: None, on_gpu: None })
 }
 
 /// A built structure as bytes: how the browser's build worker hands it to the page.

@@ -175,10 +175,9 @@ pub fn spawn_build(
                 config,
                 grid,
                 report,
-                in_worker: true,
+                built_on: super::built::BuiltOn::Worker,
                 pose: worker_pose,
                 on_gpu: None,
-                gpu_built: false,
             });
             let _ = tx.send(built);
             wake.request_repaint();

@@ -12,7 +12,7 @@ use super::errors::ErrorKind;
 use super::jobs::{self, Job, LoadedScene, SceneSource};
 use super::orbit::Orbit;
 use super::timeline::Timeline;
-use crate::gui::built::Built;
+use crate::gui::built::{Built, BuiltOn};
 
 #[derive(Debug)]
 pub(super) struct SceneState {
@@ -107,7 +107,12 @@ impl GridrtApp {
             let pose = self.timeline.as_ref().map(|t| t.wanted()).filter(|_| scene.loaded.player.is_some());
             let on_gpu = self.gpu_build().is_some() && gridrt_gpu::build::GridBuilder::supports(&want);
             let have = self.built.as_ref().map(|b| {
-                (b.built.scene_generation, b.built.config, b.built.pose.as_ref().map(|p| p.time), b.built.gpu_built)
+                (
+                    b.built.scene_generation,
+                    b.built.config,
+                    b.built.pose.as_ref().map(|p| p.time),
+                    b.built.built_on == BuiltOn::Gpu,
+                )
             });
             let failed = self.errors.build_failed(&want)
                 || pose.is_some_and(|p| self.timeline.as_ref().and_then(|t| t.failed) == Some(p));
@@ -202,7 +207,7 @@ impl GridrtApp {
     }
 
     pub(super) fn set_built(&mut self, mut built: Built) {
-        self.worker_builds += u64::from(built.in_worker);
+        self.worker_builds += u64::from(built.built_on == BuiltOn::Worker);
         if let Some(on_gpu) = built.on_gpu.take() {
             // Built on the device: the structure and the triangles are used as they are.
             let posed_gpu = built.pose.is_some().then_some(on_gpu.scene);

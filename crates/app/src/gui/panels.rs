@@ -281,17 +281,7 @@ pub fn stats(
                 row("macrocell A", a.to_string());
             }
             row("memory", format!("{} ({:.1} B/tri)", human_bytes(st.memory_bytes), st.memory_bytes_per_triangle));
-            row(
-                "built on",
-                (if b.gpu_built {
-                    "the GPU"
-                } else if b.in_worker {
-                    "the build worker"
-                } else {
-                    "the CPU"
-                })
-                .into(),
-            );
+            row("built on", b.built_on.name().into());
             row("build ms", format!("{:.1}", b.report.times.total()));
             for (phase, ms) in &b.report.times.0 {
                 row(&format!("  {phase}"), format!("{ms:.1}"));

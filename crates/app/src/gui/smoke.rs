@@ -8,6 +8,7 @@ use std::sync::{Arc, Mutex};
 use eframe::egui;
 use web_time::Instant;
 
+use super::built::BuiltOn;
 use super::errors::ErrorKind;
 use super::hook::{CapturedFrame, Hook, HookCommand, HookStats};
 use super::jobs::SceneSource;
@@ -40,7 +41,7 @@ impl GridrtApp {
     pub(super) fn smoke_step(&mut self, ctx: &egui::Context) {
         let frames_done = self.viewport.frames_done;
         let animation = self.animation_stats();
-        let on_gpu = self.built.as_ref().is_some_and(|b| b.built.gpu_built);
+        let on_gpu = self.built.as_ref().is_some_and(|b| b.built.built_on == BuiltOn::Gpu);
         let Some(s) = &mut self.smoke else { return };
         ctx.request_repaint();
         if s.started.elapsed().as_secs_f64() > SMOKE_TIMEOUT_S {
@@ -137,8 +138,7 @@ impl GridrtApp {
                 HookCommand::GpuBuild(on) => self.settings.gpu_build = on,
                 HookCommand::Seek(seconds) => {
                     if let (Some(t), Some(s)) = (&mut self.timeline, &self.scene) {
-                        t.seconds = s.loaded.clips[t.clip].clamp(seconds);
-                        t.failed = None;
+                        t.seek(&s.loaded.clips[t.clip], seconds);
                     }
                 }
             }
@@ -224,7 +224,7 @@ impl GridrtApp {
             build_ms: built.map_or(0.0, |b| b.report.times.total()),
             building: self.build_job.is_some(),
             worker_builds: self.worker_builds,
-            gpu_built: built.is_some_and(|b| b.gpu_built),
+            gpu_built: built.is_some_and(|b| b.built_on == BuiltOn::Gpu),
             idle: self.idle() && self.captures.is_empty() && self.capture.is_none(),
             error: self.errors.joined(),
             first_frame_ms: self.first_frame_ms,

@@ -104,6 +104,12 @@ impl Timeline {
         }
     }
 
+    /// Moves to `seconds` (clamped to the clip); a pose that failed may be tried again.
+    pub fn seek(&mut self, clip: &Clip, seconds: f64) {
+        self.seconds = clip.clamp(seconds);
+        self.failed = None;
+    }
+
     /// Moves by `frames` frames at [`STEP_FPS`] (paused), within the clip.
     pub fn step(&mut self, clip: &Clip, frames: i32) {
         self.playing = false;
@@ -179,8 +185,7 @@ pub fn ui(ui: &mut egui::Ui, tl: &mut Timeline, clips: &[Clip]) {
         });
         if chosen != tl.clip {
             tl.clip = chosen;
-            tl.seconds = clips[chosen].start;
-            tl.failed = None;
+            tl.seek(&clips[chosen], clips[chosen].start);
         }
         let clip = &clips[tl.clip];
         if ui.button("<").on_hover_text(format!("back 1/{STEP_FPS} s (pauses)")).clicked() {
@@ -198,8 +203,7 @@ pub fn ui(ui: &mut egui::Ui, tl: &mut Timeline, clips: &[Clip]) {
             .fixed_decimals(2)
             .clamping(egui::SliderClamping::Always);
         if ui.add_sized([ui.available_width().clamp(120.0, 360.0), 18.0], slider).changed() {
-            tl.seconds = t;
-            tl.failed = None;
+            tl.seek(clip, t);
         }
         ui.add(egui::DragValue::new(&mut tl.speed).range(0.05..=8.0).speed(0.01).prefix("speed ×"));
         ui.checkbox(&mut tl.looped, "loop");
