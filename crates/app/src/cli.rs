@@ -109,7 +109,8 @@ pub enum Command {
     Rays(RaysArgs),
     /// Trace a ray file and write the closest hits (16 bytes per ray: f32 t, u32 triangle, f32 u, f32 v).
     Trace(TraceArgs),
-    /// Render an image on the GPU (camera rays, closest hit, shading) and write a PNG.
+    /// Render an image (camera rays, closest hit, shadow rays, shading) on the GPU or the CPU
+    /// (coherent packets by default) and write a PNG.
     Render(RenderArgs),
     /// Measure Mrays/s of the CPU (all threads) and the GPU on primary and random rays.
     BenchTrace(BenchTraceArgs),
@@ -153,6 +154,13 @@ pub struct AnimateArgs {
     /// Print the timeline as JSON on stdout (and nothing else there).
     #[arg(long)]
     pub json: bool,
+}
+
+/// On or off (`render --packets`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Switch {
+    On,
+    Off,
 }
 
 /// Where a stage runs (`animate --backend`, `build --backend`).
@@ -399,6 +407,25 @@ pub struct RenderArgs {
     /// Count at the top of the heatmap colour scale (positive).
     #[arg(long, default_value_t = 64.0, value_parser = parse_heat_max)]
     pub heat_max: f32,
+    /// Where the rays are traced: gpu (the WGSL kernels) or cpu (all threads).
+    #[arg(long, value_enum, default_value = "gpu")]
+    pub backend: Device,
+    /// Coherent packets for the primary and shadow rays (CPU: flat, macrocell and proximity
+    /// grids; the GPU kernels trace single rays).
+    #[arg(long, value_enum, default_value = "on")]
+    pub packets: Switch,
+    /// Packet edge in pixels.
+    #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub tile: u32,
+    /// Write the per-pixel primary hits (row-major) in the hits format.
+    #[arg(long)]
+    pub hits_out: Option<PathBuf>,
+    /// Write the primary rays (row-major) in the ray format.
+    #[arg(long)]
+    pub rays_out: Option<PathBuf>,
+    /// Print a JSON summary on stdout (and nothing else there).
+    #[arg(long)]
+    pub json: bool,
     /// Output PNG.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -525,6 +552,9 @@ pub struct BenchTraceArgs {
     /// Repetitions (the best is reported).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeat: u32,
+    /// Edge of the CPU's square ray packets, in pixels (the packet column).
+    #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub tile: u32,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,

@@ -4,11 +4,12 @@
 //! Data flows one way: triangles → [`resolution`] (choose the grid size) → a structure
 //! ([`flat`], [`macrocell`], [`multires`], [`twolevel`], [`proximity`]; built with [`insert`],
 //! hierarchies laid out by [`hierarchy`]) → closest hit ([`trace`], walking cells with a
-//! [`traversal`]) → hits and [`stats`]. [`structure`] is the one entry point over all kinds;
+//! [`traversal`]; packets of coherent rays slice by slice with [`coherent`]) → hits and [`stats`]. [`structure`] is the one entry point over all kinds;
 //! [`brute`] is the reference every structure must reproduce bit for bit.
 
 pub mod brute;
 pub mod build;
+pub mod coherent;
 pub mod flat;
 pub mod geometry;
 pub mod hierarchy;
@@ -31,6 +32,7 @@ use gridrt_scene::Aabb;
 use thiserror::Error;
 
 pub use build::{BuildOptions, PhaseTimes, check_cells};
+pub use coherent::{PacketOptions, PacketStats};
 pub use flat::FlatGrid;
 pub use geometry::GridGeometry;
 pub use insert::InsertMode;

@@ -6,6 +6,7 @@ use gridrt_scene::{Hit, Ray};
 use serde::{Deserialize, Serialize};
 
 use crate::build::{BuildOptions, PhaseTimes};
+use crate::coherent::{self, PacketOptions, PacketStats};
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
 use crate::hierarchy::Hierarchy;
@@ -156,6 +157,36 @@ impl AnyGrid {
         parallel: bool,
     ) -> (Vec<Hit>, BatchStats) {
         trace_batch(rays, parallel, |r| self.trace(tris, r, opts))
+    }
+
+    /// Closest hits of an image's rays (`rays` row-major, `width` per row) in packets of
+    /// coherent rays ([`crate::coherent`]): the flat grid, the macrocell grid (empty macrocells
+    /// skipped per slice) and the proximity grid's cells walk slice by slice; the hierarchies
+    /// trace single rays (no packets). Hits are those of [`AnyGrid::trace_batch`], bit for bit.
+    pub fn trace_packets(
+        &self,
+        tris: &[[Vec3; 3]],
+        rays: &[Ray],
+        width: usize,
+        opts: TraceOptions,
+        packets: PacketOptions,
+        parallel: bool,
+    ) -> (Vec<Hit>, BatchStats, PacketStats) {
+        let single = |r: &Ray| self.trace(tris, r, opts);
+        match self {
+            AnyGrid::Flat(g) => coherent::trace_image(g, tris, rays, width, packets, parallel, single),
+            AnyGrid::Proximity(p) => coherent::trace_image(&p.grid, tris, rays, width, packets, parallel, single),
+            AnyGrid::Macrocell(g) => coherent::trace_image(g, tris, rays, width, packets, parallel, single),
+            AnyGrid::Multires(_) | AnyGrid::TwoLevel(_) => {
+                let (hits, stats) = self.trace_batch(tris, rays, opts, parallel);
+                (hits, stats, PacketStats::default())
+            }
+        }
+    }
+
+    /// Whether [`AnyGrid::trace_packets`] walks packets for this kind (else single rays).
+    pub fn has_packets(&self) -> bool {
+        !matches!(self, AnyGrid::Multires(_) | AnyGrid::TwoLevel(_))
     }
 
     /// A 64-bit FNV-1a hash of the structure's arrays as the GPU reads them: the cell table

@@ -1,12 +1,14 @@
 //! `gridrt bench-trace SCENE`: Mrays/s of the CPU reference (all threads) and the GPU trace
-//! pass on the same primary (camera) and random rays, in one run. Prints; asserts nothing.
+//! pass on the same camera (auto and framed views) and random rays, in one run, and of the CPU's
+//! coherent packets on the camera rays. Prints; asserts nothing.
 
 use std::time::Instant;
 
 use gridrt_gpu::GpuSession;
+use gridrt_grid::PacketOptions;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_scene::Camera;
-use gridrt_scene::rays::{camera_rays, random_rays};
+use gridrt_scene::rays::{image_rays, random_rays};
 use serde_json::json;
 
 use super::build_grid;
@@ -21,8 +23,24 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let gpu = GpuSession::new(&ctx, &tris, b)?;
     let gs = gpu.upload(&grid)?;
     let opts = TraceOptions { traversal: args.traversal, mailbox: true };
-    let sets =
-        [("primary", camera_rays(&Camera::fit(&b, 4.0 / 3.0), args.rays)), ("random", random_rays(&b, args.rays, 1))];
+    // Camera rays as whole 4:3 images of about `--rays` pixels, so packets tile them.
+    let width = ((args.rays as f64 * 4.0 / 3.0).sqrt().round() as u32).max(1);
+    let height = (args.rays as u32 / width).max(1);
+    let framed = crate::lab::views::framed_camera(&tris, &b, &grid, width as f32 / height as f32);
+    let image = |cam: &Camera| Some(image_rays(cam, width, height));
+    let sets = [
+        ("primary", image(&Camera::fit(&b, width as f32 / height as f32))),
+        ("framed", image(&framed)),
+        ("random", None),
+    ];
+    let sets: Vec<(&str, Vec<gridrt_scene::Ray>, bool)> = sets
+        .into_iter()
+        .map(|(name, rays)| match rays {
+            Some(r) => (name, r, true),
+            None => (name, random_rays(&b, args.rays, 1), false),
+        })
+        .collect();
+    let packets = PacketOptions { tile: args.tile, mailbox: true };
     let best = |f: &mut dyn FnMut()| {
         (0..args.repeat.max(1))
             .map(|_| {
@@ -36,9 +54,15 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     // few rays do not (the first full-size call also paid ~0.2 s on lavapipe).
     gpu.trace(&gs, &sets[0].1, args.traversal, true)?;
     let mut rows = Vec::new();
-    for (name, rays) in &sets {
+    for (name, rays, is_image) in &sets {
         let cpu_s = best(&mut || {
             grid.trace_batch(&tris, rays, opts, true);
+        });
+        // Packets only where the rays are an image (and the kind walks packets).
+        let packet_s = (*is_image && grid.has_packets()).then(|| {
+            best(&mut || {
+                grid.trace_packets(&tris, rays, width as usize, opts, packets, true);
+            })
         });
         let mut err = None;
         let gpu_s = best(&mut || {
@@ -50,12 +74,17 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
             return Err(e.into());
         }
         let n = rays.len() as f64;
-        rows.push(json!({"rays": name, "count": rays.len(), "cpu_mrays_s": n / cpu_s / 1e6, "gpu_mrays_s": n / gpu_s / 1e6, "gpu_over_cpu": cpu_s / gpu_s}));
+        let hits = grid.trace_batch(&tris, rays, opts, true).1.hits;
+        rows.push(
+            json!({"rays": name, "count": rays.len(), "hit_share": hits as f64 / n, "cpu_mrays_s": n / cpu_s / 1e6,
+            "cpu_packets_mrays_s": packet_s.map(|s| n / s / 1e6), "packets_over_single": packet_s.map(|s| cpu_s / s),
+            "gpu_mrays_s": n / gpu_s / 1e6, "gpu_over_cpu": cpu_s / gpu_s}),
+        );
     }
     if args.json {
         let out = json!({
             "scene": report.source, "triangles": tris.len(), "grid": grid.kind().name(), "traversal": args.traversal.short_name(),
-            "build_ms": build.times.total(), "cpu_threads": rayon::current_num_threads(), "adapter": ctx.adapter_name(), "results": rows,
+            "build_ms": build.times.total(), "packet_tile": args.tile, "cpu_threads": rayon::current_num_threads(), "adapter": ctx.adapter_name(), "results": rows,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
@@ -69,15 +98,30 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         rayon::current_num_threads(),
         ctx.adapter_name()
     );
-    println!("{:<8} {:>10} {:>14} {:>14} {:>9}", "rays", "count", "CPU Mrays/s", "GPU Mrays/s", "GPU/CPU");
+    let tile = args.tile;
+    println!(
+        "{:<8} {:>10} {:>6} {:>12} {:>16} {:>9} {:>12} {:>8}",
+        "rays",
+        "count",
+        "hits",
+        "CPU Mrays/s",
+        format!("{tile}x{tile} packets"),
+        "speed-up",
+        "GPU Mrays/s",
+        "GPU/CPU"
+    );
+    let num = |v: &serde_json::Value, digits: usize| v.as_f64().map_or("-".to_string(), |x| format!("{x:.digits$}"));
     for r in &rows {
         println!(
-            "{:<8} {:>10} {:>14.2} {:>14.2} {:>9.2}",
+            "{:<8} {:>10} {:>5.0}% {:>12} {:>16} {:>9} {:>12} {:>8}",
             r["rays"].as_str().unwrap_or(""),
             r["count"],
-            r["cpu_mrays_s"].as_f64().unwrap_or(0.0),
-            r["gpu_mrays_s"].as_f64().unwrap_or(0.0),
-            r["gpu_over_cpu"].as_f64().unwrap_or(0.0)
+            r["hit_share"].as_f64().unwrap_or(0.0) * 100.0,
+            num(&r["cpu_mrays_s"], 2),
+            num(&r["cpu_packets_mrays_s"], 2),
+            num(&r["packets_over_single"], 2),
+            num(&r["gpu_mrays_s"], 2),
+            num(&r["gpu_over_cpu"], 2)
         );
     }
     if ctx.info.device_type == wgpu::DeviceType::Cpu {

@@ -1,20 +1,40 @@
-//! `gridrt render SCENE -o out.png`: one GPU frame of any view, written as PNG.
+//! `gridrt render SCENE -o out.png`: one frame of any view, written as PNG. On the GPU the
+//! render kernels draw it; on the CPU the same rays (the kernels' CPU ports) are traced on all
+//! threads, in coherent packets by default, and shaded by the CPU port of the shade kernel.
+//! Optionally the primary rays and hits, and a JSON summary.
+
+use std::time::Instant;
 
 use anyhow::Context;
 use gridrt_gpu::{GpuSession, RenderOptions};
-use gridrt_scene::Camera;
+use gridrt_grid::{AnyGrid, PacketOptions, PacketStats};
+use gridrt_scene::{Camera, Hit, Ray};
+use rayon::prelude::*;
+use serde_json::json;
 
 use super::build_grid;
-use crate::cli::RenderArgs;
+use crate::cli::{Device, RenderArgs, Switch};
+
+/// What one frame cost and gave.
+struct Rendered {
+    rgba: Vec<u8>,
+    hits: Vec<Hit>,
+    primary_ms: f64,
+    /// The CPU's shadow pass (the GPU frame's time is all in `primary_ms`).
+    shadow_ms: Option<f64>,
+    cells_per_ray: f64,
+    tests_per_ray: f64,
+    packets: PacketStats,
+}
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
     let tris = mesh.triangles();
     let bounds = mesh.bounds();
     let (width, height) = args.size;
-    // The frame comes back whole (pixels, hits and stats: 28 bytes a pixel); the GPU renders it
-    // in tiles.
-    let need = width as u64 * height as u64 * 28;
+    // The frame comes back whole (pixels, hits and stats: 28 bytes a pixel, and the CPU's
+    // rays: 32 more).
+    let need = width as u64 * height as u64 * 60;
     let budget = gridrt_scene::load_budget::default_max_bytes();
     anyhow::ensure!(
         need <= budget,
@@ -28,9 +48,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         "interior" => crate::lab::views::interior_camera(&tris, &bounds, &grid),
         s => Camera::parse(s).map_err(|e| anyhow::anyhow!("--camera: {e}"))?,
     };
-    let ctx = super::gpu_context()?;
-    let gpu = GpuSession::new(&ctx, &tris, bounds)?;
-    let gs = gpu.upload(&grid)?;
     let opts = RenderOptions {
         width,
         height,
@@ -40,28 +57,101 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         mailbox: !args.no_mailbox,
         heat_max: args.heat_max,
     };
-    // Warm-up on a small frame: pipeline compilation stays out of the timing.
-    gpu.render(&gs, &RenderOptions { width: 64, height: 48, ..opts })?;
-    let start = std::time::Instant::now();
-    let frame = gpu.render(&gs, &opts)?;
-    let ms = start.elapsed().as_secs_f64() * 1e3;
+    let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&camera, width, height));
+    let packets_on = args.packets == Switch::On;
+    let (frame, adapter) = match args.backend {
+        Device::Gpu => {
+            let ctx = super::gpu_context()?;
+            let gpu = GpuSession::new(&ctx, &tris, bounds)?;
+            let gs = gpu.upload(&grid)?;
+            // Warm-up on a small frame: pipeline compilation stays out of the timing.
+            gpu.render(&gs, &RenderOptions { width: 64, height: 48, ..opts })?;
+            let start = Instant::now();
+            let frame = gpu.render(&gs, &opts)?;
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            let n = frame.stats.len().max(1) as f64;
+            let rendered = Rendered {
+                cells_per_ray: frame.stats.iter().map(|s| s.cells as f64).sum::<f64>() / n,
+                tests_per_ray: frame.stats.iter().map(|s| s.tests as f64).sum::<f64>() / n,
+                rgba: frame.rgba,
+                hits: frame.hits,
+                primary_ms: ms,
+                shadow_ms: None,
+                packets: PacketStats::default(),
+            };
+            (rendered, Some(ctx.adapter_name()))
+        }
+        Device::Cpu => {
+            anyhow::ensure!(
+                !(args.view.is_heatmap() && packets_on && grid.has_packets()),
+                "the heatmap views need per-ray counts, which packets do not keep: add --packets off"
+            );
+            let packets = packets_on.then_some(PacketOptions { tile: args.tile, mailbox: !args.no_mailbox });
+            (cpu_frame(&grid, &tris, &bounds, &opts, &primary, packets), None)
+        }
+    };
     image::save_buffer(&args.output, &frame.rgba, width, height, image::ExtendedColorType::Rgba8)
         .with_context(|| format!("writing {}", args.output.display()))?;
-    let n = frame.stats.len() as f64;
-    let cells: f64 = frame.stats.iter().map(|s| s.cells as f64).sum::<f64>() / n;
-    let tests: f64 = frame.stats.iter().map(|s| s.tests as f64).sum::<f64>() / n;
+    if let Some(path) = &args.hits_out {
+        gridrt_scene::rays::write_hits(path, &frame.hits).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let Some(path) = &args.rays_out {
+        gridrt_scene::rays::write_rays(path, &primary).with_context(|| format!("writing {}", path.display()))?;
+    }
+    let rays = primary.len();
+    let hits = frame.hits.iter().filter(|h| h.is_hit()).count();
+    let backend = match args.backend {
+        Device::Cpu => "cpu",
+        Device::Gpu => "gpu",
+    };
+    if args.json {
+        let out = json!({
+            "scene": report.source, "triangles": tris.len(), "grid": grid.kind().name(), "backend": backend,
+            "adapter": adapter, "view": args.view.name(), "width": width, "height": height, "rays": rays, "hits": hits,
+            "primary_ms": frame.primary_ms, "shadow_ms": frame.shadow_ms, "build_ms": b.times.total(),
+            "packets": frame.packets.packets, "single_ray_packets": frame.packets.single_ray_packets,
+            "tile": if frame.packets.packets > 0 { Some(args.tile) } else { None },
+            "cells_per_ray": frame.cells_per_ray, "tests_per_ray": frame.tests_per_ray,
+            "output": args.output,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
     println!(
-        "{} ({} triangles), {} grid, {} view, {width}x{height}",
+        "{} ({} triangles), {} grid, {} view, {width}x{height} on the {backend}",
         report.source,
         tris.len(),
         grid.kind(),
         args.view.name()
     );
-    println!(
-        "frame: {ms:.1} ms ({:.2} Mrays/s primary), {cells:.2} cells and {tests:.2} tests per primary ray; build {:.1} ms",
-        n / ms / 1e3,
-        b.times.total()
-    );
+    let packets = match (args.backend, frame.packets.packets + frame.packets.single_ray_packets) {
+        (Device::Gpu, _) if packets_on => "; packets: none (the GPU kernels trace single rays)".to_string(),
+        (_, 0) if packets_on => format!("; packets: none (the {} grid traces single rays)", grid.kind()),
+        (_, 0) => String::new(),
+        (_, _) => format!(
+            "; {0}x{0} packets: {1} walked slice by slice, {2} incoherent (single rays)",
+            args.tile, frame.packets.packets, frame.packets.single_ray_packets
+        ),
+    };
+    let mrays = |ms: f64| rays as f64 / ms / 1e3;
+    match frame.shadow_ms {
+        Some(s) => println!(
+            "primary {:.1} ms ({:.2} Mrays/s), shadow {s:.1} ms, {:.2} cells and {:.2} tests per primary ray{packets}; build {:.1} ms",
+            frame.primary_ms,
+            mrays(frame.primary_ms),
+            frame.cells_per_ray,
+            frame.tests_per_ray,
+            b.times.total()
+        ),
+        None => println!(
+            "frame: {:.1} ms ({:.2} Mrays/s primary), {:.2} cells and {:.2} tests per primary ray{packets}; build {:.1} ms",
+            frame.primary_ms,
+            mrays(frame.primary_ms),
+            frame.cells_per_ray,
+            frame.tests_per_ray,
+            b.times.total()
+        ),
+    }
     if args.view.is_heatmap() {
         println!(
             "colour scale: 0 black, {:.0} blue, {:.0} cyan, {:.0} green, {:.0} yellow, {:.0} red, >= {:.0} white",
@@ -75,4 +165,66 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     println!("wrote {}", args.output.display());
     Ok(())
+}
+
+/// The frame on the CPU: primary rays, shadow rays from their hits, shading (the CPU ports of
+/// the render kernels). `packets`: trace both passes in coherent packets.
+fn cpu_frame(
+    grid: &AnyGrid,
+    tris: &[[glam::Vec3; 3]],
+    bounds: &gridrt_scene::Aabb,
+    opts: &RenderOptions,
+    primary: &[Ray],
+    packets: Option<PacketOptions>,
+) -> Rendered {
+    let shade = gridrt_gpu::render::shade_params(bounds, opts);
+    let topts = gridrt_grid::TraceOptions { traversal: opts.traversal, mailbox: opts.mailbox };
+    let width = opts.width as usize;
+    // Per-ray counts only for the heatmaps (single rays; packets keep none).
+    let per_ray = opts.view.is_heatmap();
+    let trace = |rays: &[Ray]| -> (Vec<Hit>, Vec<gridrt_grid::RayStats>, gridrt_grid::BatchStats, PacketStats) {
+        match packets {
+            Some(p) => {
+                let (h, b, ps) = grid.trace_packets(tris, rays, width, topts, p, true);
+                (h, Vec::new(), b, ps)
+            }
+            None if per_ray => {
+                let (h, s): (Vec<Hit>, Vec<_>) = rays.par_iter().map(|r| grid.trace(tris, r, topts)).unzip();
+                let mut b = gridrt_grid::BatchStats::default();
+                h.iter().zip(&s).for_each(|(h, s)| b.add(*s, h.is_hit()));
+                (h, s, b, PacketStats::default())
+            }
+            None => {
+                let (h, b) = grid.trace_batch(tris, rays, topts, true);
+                (h, Vec::new(), b, PacketStats::default())
+            }
+        }
+    };
+    let start = Instant::now();
+    let (hits, stats, batch, ps) = trace(primary);
+    let primary_ms = start.elapsed().as_secs_f64() * 1e3;
+    let start = Instant::now();
+    let shadow: Vec<Ray> =
+        primary.par_iter().zip(&hits).map(|(r, h)| gridrt_gpu::cpu::shadow_ray(&shade, r, h)).collect();
+    let (shadow_hits, _, _, sps) = trace(&shadow);
+    let shadow_ms = start.elapsed().as_secs_f64() * 1e3;
+    let none = gridrt_grid::RayStats::default();
+    let rgba: Vec<u8> = (0..primary.len())
+        .into_par_iter()
+        .map(|i| {
+            let tri = if hits[i].is_hit() { tris[hits[i].triangle as usize] } else { [glam::Vec3::ZERO; 3] };
+            let s = stats.get(i).unwrap_or(&none);
+            gridrt_gpu::cpu::shade_pixel(&shade, &primary[i], &hits[i], s, &shadow_hits[i], tri).to_le_bytes()
+        })
+        .flatten_iter()
+        .collect();
+    Rendered {
+        rgba,
+        hits,
+        primary_ms,
+        shadow_ms: Some(shadow_ms),
+        cells_per_ray: batch.mean_cells(),
+        tests_per_ray: batch.mean_tests(),
+        packets: ps.merge(sps),
+    }
 }

@@ -1,6 +1,7 @@
 //! Test modules and shared helpers.
 pub mod build;
 pub mod closest_hit;
+pub mod coherent;
 pub mod common;
 pub mod degenerate;
 pub mod traversal;

@@ -68,6 +68,8 @@ const BVH_UPDATE_MAX_TRIANGLES: usize = 50_000;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Strategy {
     Grid(GridKind),
+    /// The grid traced in coherent packets (primary and shadow rays).
+    GridPackets(GridKind),
     #[cfg(feature = "peers")]
     Rebuild(super::peers::PeerKind),
     /// A tree of this peer built once (its setup) and updated every frame.
@@ -78,6 +80,7 @@ enum Strategy {
 impl Strategy {
     fn all(with_peers: bool) -> Vec<Strategy> {
         let mut v: Vec<Strategy> = GridKind::ALL.iter().map(|&k| Strategy::Grid(k)).collect();
+        v.extend([GridKind::Flat, GridKind::Macrocell].map(Strategy::GridPackets));
         #[cfg(feature = "peers")]
         if with_peers {
             use super::peers::PeerKind;
@@ -99,6 +102,7 @@ impl Strategy {
     fn name(self) -> String {
         match self {
             Strategy::Grid(k) => k.name().into(),
+            Strategy::GridPackets(k) => format!("{k}, packets"),
             #[cfg(feature = "peers")]
             Strategy::Rebuild(p) => p.name().into(),
             #[cfg(feature = "peers")]
@@ -111,7 +115,8 @@ impl Strategy {
 
 /// A structure built for one frame.
 enum Built {
-    Grid(gridrt_grid::AnyGrid),
+    /// A grid, and whether it traces packets.
+    Grid(gridrt_grid::AnyGrid, bool),
     #[cfg(feature = "peers")]
     Peer(super::peers::PeerBvh),
 }
@@ -119,7 +124,10 @@ enum Built {
 impl Built {
     fn trace(&self, tris: &[[glam::Vec3; 3]], rays: &[Ray], opts: TraceOptions) -> Vec<Hit> {
         match self {
-            Built::Grid(g) => g.trace_batch(tris, rays, opts, true).0,
+            Built::Grid(g, false) => g.trace_batch(tris, rays, opts, true).0,
+            Built::Grid(g, true) => {
+                g.trace_packets(tris, rays, SIZE as usize, opts, gridrt_grid::PacketOptions::default(), true).0
+            }
             #[cfg(feature = "peers")]
             Built::Peer(p) => p.trace_batch(tris, rays),
         }
@@ -260,9 +268,10 @@ fn bench_scene(
             let setup_frame = strategy.refit() && k == 0;
             let start = Instant::now();
             let built = match strategy {
-                Strategy::Grid(kind) => {
-                    Built::Grid(structure::build(tris, &GridConfig { kind, cost: *cost, ..GridConfig::default() })?.0)
-                }
+                Strategy::Grid(kind) | Strategy::GridPackets(kind) => Built::Grid(
+                    structure::build(tris, &GridConfig { kind, cost: *cost, ..GridConfig::default() })?.0,
+                    matches!(strategy, Strategy::GridPackets(_)),
+                ),
                 #[cfg(feature = "peers")]
                 Strategy::Rebuild(p) => Built::Peer(super::peers::build(p, tris)),
                 #[cfg(feature = "peers")]
@@ -309,7 +318,7 @@ fn bench_scene(
         .iter()
         .zip(&sums)
         .map(|(&strategy, t)| {
-            let grid = matches!(strategy, Strategy::Grid(_));
+            let grid = matches!(strategy, Strategy::Grid(_) | Strategy::GridPackets(_));
             let refit = strategy.refit();
             let Totals { setup_ms: setup, build_ms: build, trace_ms: trace, mismatches: bad } = *t;
             // A refit's first frame is its setup build: averaged over the remaining frames.

@@ -1,0 +1,274 @@
+//! The packet's frustum, slice by slice: the axis the packet walks along, each ray's line in
+//! grid space, and the rectangle of cells the packet's rays cross in a slice.
+//!
+//! On the walk axis `a`, ray i's position on another axis is the line
+//! `c_i + slope_i · (s − s_ref)` of the plane coordinate `s`. Over the active rays the
+//! intercepts and slopes are bounded by intervals, so a slice's rectangle costs a few
+//! operations however many rays are active (the intervals are recomputed only when a ray leaves).
+//! `s_ref` is the plane where the rays are closest together: the camera's eye for camera rays,
+//! the light for shadow rays towards it, so the bounds there are tight. The lines are computed
+//! in f64 from the f32 grid-space rays the single-ray walkers use, so the rectangle holds each
+//! ray's cells exactly; [`SLICE_MARGIN_CELLS`] widens it further (smaller than the insertion
+//! margin, so a triangle a ray meets lies in a cell the packet visits).
+
+use glam::UVec3;
+use gridrt_scene::Ray;
+
+use crate::geometry::GridGeometry;
+use crate::ray::PreparedRay;
+
+/// Widening of each slice rectangle and each ray's slice range, in cells.
+pub const SLICE_MARGIN_CELLS: f64 = 1.0 / 512.0;
+
+/// One ray of a packet.
+#[derive(Clone, Copy, Debug)]
+pub struct Lane {
+    /// None for rays no triangle can be hit by or that miss the grid: they stay misses.
+    pub ray: Option<PreparedRay>,
+    /// Grid-space origin and direction (as the single-ray walkers see them), in f64.
+    o: [f64; 3],
+    d: [f64; 3],
+    /// The segment clipped to the grid.
+    t0: f32,
+    t1: f32,
+    /// Slopes of the line on the two other axes (per cell along the walk axis).
+    slope: [f64; 2],
+    /// The ray parameter at plane `s` of the walk axis is `t_at_0 + s · t_per_cell`.
+    t_at_0: f64,
+    t_per_cell: f64,
+    /// First and last step (see [`SliceWalk::slice`]) of the ray's slices.
+    pub first: u32,
+    pub last: u32,
+}
+
+impl Lane {
+    /// Whether the walk has reached the ray's first slice at step `j`.
+    #[inline]
+    pub fn started(&self, j: u32) -> bool {
+        j >= self.first
+    }
+}
+
+/// Bounds over the active rays of their lines' intercepts and slopes on the two other axes.
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    c_lo: [f64; 2],
+    c_hi: [f64; 2],
+    slope_lo: [f64; 2],
+    slope_hi: [f64; 2],
+}
+
+/// The walk of one packet: axis, direction, steps and the frustum of its active rays.
+#[derive(Clone, Copy, Debug)]
+pub struct SliceWalk {
+    /// The axis the packet walks along (every ray moves along it with the same sign).
+    pub axis: usize,
+    pub positive: bool,
+    /// Slices along the axis.
+    pub slices: u32,
+    first: u32,
+    last: u32,
+    /// The reference plane of the lines' intercepts.
+    s_ref: f64,
+    bounds: Bounds,
+}
+
+impl SliceWalk {
+    /// Prepares `rays` as `lanes` and chooses the walk axis: the dominant axis of the packet's
+    /// mean direction, which every valid ray must cross with the same sign. `None` for an
+    /// incoherent packet (trace its rays one by one).
+    /// `active` receives the valid lanes.
+    pub fn new(geom: &GridGeometry, rays: &[Ray], lanes: &mut Vec<Lane>, active: &mut Vec<u32>) -> Option<SliceWalk> {
+        lanes.clear();
+        active.clear();
+        let mut mean = [0f64; 3];
+        let mut ends = (None, None);
+        for r in rays {
+            let clipped = PreparedRay::new(r).and_then(|pr| geom.clip(&pr).map(|g| (pr, g)));
+            let lane = match clipped {
+                Some((ray, g)) => {
+                    let o = g.o.to_array().map(f64::from);
+                    let d = g.d.to_array().map(f64::from);
+                    // Camera and shadow rays of a tile have similar lengths: a plain sum.
+                    (0..3).for_each(|k| mean[k] += d[k]);
+                    if ends.0.is_none() {
+                        let end = (r.tmax.is_finite()).then(|| std::array::from_fn(|k| o[k] + d[k] * r.tmax as f64));
+                        ends = (Some(o), end);
+                    }
+                    Lane {
+                        ray: Some(ray),
+                        o,
+                        d,
+                        t0: g.t0,
+                        t1: g.t1,
+                        slope: [0.0; 2],
+                        t_at_0: 0.0,
+                        t_per_cell: 0.0,
+                        first: 0,
+                        last: 0,
+                    }
+                }
+                None => Lane {
+                    ray: None,
+                    o: [0.0; 3],
+                    d: [1.0, 0.0, 0.0],
+                    t0: 0.0,
+                    t1: 0.0,
+                    slope: [0.0; 2],
+                    t_at_0: 0.0,
+                    t_per_cell: 0.0,
+                    first: 0,
+                    last: 0,
+                },
+            };
+            lanes.push(lane);
+        }
+        let axis = crate::ray::argmax3(mean.map(f64::abs));
+        let positive = mean[axis] > 0.0;
+        let res = geom.res[axis];
+        let (mut first, mut last) = (u32::MAX, 0u32);
+        for l in lanes.iter_mut().filter(|l| l.ray.is_some()) {
+            if !(l.d[axis] != 0.0 && (l.d[axis] > 0.0) == positive) {
+                return None;
+            }
+            let (e, x) = (l.o[axis] + l.d[axis] * l.t0 as f64, l.o[axis] + l.d[axis] * l.t1 as f64);
+            let slice = |v: f64| (v.floor().max(0.0) as u32).min(res - 1);
+            let step = |k: u32| if positive { k } else { res - 1 - k };
+            let m = SLICE_MARGIN_CELLS;
+            let (a, b) = if positive { (slice(e - m), slice(x + m)) } else { (slice(e + m), slice(x - m)) };
+            (l.first, l.last) = (step(a), step(b));
+            l.t_per_cell = 1.0 / l.d[axis];
+            l.slope = [(axis + 1) % 3, (axis + 2) % 3].map(|u| l.d[u] * l.t_per_cell);
+            l.t_at_0 = -l.o[axis] * l.t_per_cell;
+            first = first.min(l.first);
+            last = last.max(l.last);
+        }
+        let mut walk = SliceWalk {
+            axis,
+            positive,
+            slices: res,
+            first,
+            last,
+            s_ref: 0.0,
+            bounds: Bounds { c_lo: [0.0; 2], c_hi: [0.0; 2], slope_lo: [0.0; 2], slope_hi: [0.0; 2] },
+        };
+        // The reference plane: the first ray's origin or its end, whichever the rays are
+        // closer together at.
+        active.extend((0..lanes.len() as u32).filter(|&i| lanes[i as usize].ray.is_some()));
+        let mut best = (f64::INFINITY, 0.0);
+        for p in [ends.0, ends.1].into_iter().flatten() {
+            walk.s_ref = p[axis];
+            walk.update(lanes, active);
+            let b = &walk.bounds;
+            let spread = (b.c_hi[0] - b.c_lo[0]) + (b.c_hi[1] - b.c_lo[1]);
+            if spread < best.0 {
+                best = (spread, walk.s_ref);
+            }
+        }
+        walk.s_ref = best.1;
+        walk.update(lanes, active);
+        Some(walk)
+    }
+
+    /// Recomputes the frustum's bounds over the `active` lanes.
+    pub fn update(&mut self, lanes: &[Lane], active: &[u32]) {
+        let a = self.axis;
+        let others = [(a + 1) % 3, (a + 2) % 3];
+        let mut b = Bounds {
+            c_lo: [f64::INFINITY; 2],
+            c_hi: [f64::NEG_INFINITY; 2],
+            slope_lo: [f64::INFINITY; 2],
+            slope_hi: [f64::NEG_INFINITY; 2],
+        };
+        for &i in active {
+            let l = &lanes[i as usize];
+            let ds = self.s_ref - l.o[a];
+            for (k, &u) in others.iter().enumerate() {
+                let slope = l.slope[k];
+                let c = l.o[u] + slope * ds;
+                b.c_lo[k] = b.c_lo[k].min(c);
+                b.c_hi[k] = b.c_hi[k].max(c);
+                b.slope_lo[k] = b.slope_lo[k].min(slope);
+                b.slope_hi[k] = b.slope_hi[k].max(slope);
+            }
+        }
+        self.bounds = b;
+    }
+
+    /// The walk's steps (empty when no ray is valid).
+    pub fn steps(&self) -> std::ops::RangeInclusive<u32> {
+        if self.first > self.last { 1..=0 } else { self.first..=self.last }
+    }
+
+    /// The slice index of step `j`.
+    #[inline]
+    pub fn slice(&self, j: u32) -> u32 {
+        if self.positive { j } else { self.slices - 1 - j }
+    }
+
+    /// The slice's near and far planes (grid coordinates along the axis) at step `j`.
+    #[inline]
+    fn planes(&self, j: u32) -> (f64, f64) {
+        let k = self.slice(j) as f64;
+        if self.positive { (k, k + 1.0) } else { (k + 1.0, k) }
+    }
+
+    /// The box of cells the active rays' lines cross in step `j`'s slice (widened by the
+    /// margin, clamped to the grid); `None` when it lies outside the grid.
+    #[inline]
+    pub fn rect(&self, j: u32, res: UVec3) -> Option<(UVec3, UVec3)> {
+        let a = self.axis;
+        let (near, far) = self.planes(j);
+        let b = &self.bounds;
+        let m = SLICE_MARGIN_CELLS;
+        let mut l = UVec3::ZERO;
+        let mut h = UVec3::ZERO;
+        let k = self.slice(j);
+        (l[a], h[a]) = (k, k);
+        for (n, u) in [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate() {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for s in [near, far] {
+                let ds = s - self.s_ref;
+                let (sl, sh) = if ds >= 0.0 { (b.slope_lo[n], b.slope_hi[n]) } else { (b.slope_hi[n], b.slope_lo[n]) };
+                lo = lo.min(b.c_lo[n] + sl * ds);
+                hi = hi.max(b.c_hi[n] + sh * ds);
+            }
+            let (lo, hi) = (lo - m, hi + m);
+            let r = res[u] as f64;
+            if hi < 0.0 || lo >= r || lo.is_nan() || hi.is_nan() {
+                return None;
+            }
+            l[u] = lo.floor().clamp(0.0, r - 1.0) as u32;
+            h[u] = hi.floor().clamp(0.0, r - 1.0) as u32;
+        }
+        Some((l, h))
+    }
+
+    /// A step no later than the first at which [`SliceWalk::ends_ray`] is true for `lane` with
+    /// its best hit at `best_t` (one slice early, to stay clear of rounding).
+    #[inline]
+    pub fn earliest_end(&self, lane: &Lane, best_t: f32) -> u32 {
+        if !best_t.is_finite() {
+            return lane.last;
+        }
+        let a = self.axis;
+        let s = lane.o[a] + lane.d[a] * best_t as f64;
+        let k = s.floor() - 1.0;
+        let step = if self.positive { k } else { self.slices as f64 - 1.0 - (k + 2.0) };
+        (step.max(0.0) as u32).min(lane.last)
+    }
+
+    /// Whether `lane` leaves the packet after step `j`: its best hit (at `best_t`) lies before
+    /// the slice's far plane, or the slice was its last. Rays that have not started stay.
+    #[inline]
+    pub fn ends_ray(&self, j: u32, lane: &Lane, best_t: f32) -> bool {
+        if !lane.started(j) {
+            return false;
+        }
+        if j >= lane.last {
+            return true;
+        }
+        let t_far = lane.t_at_0 + self.planes(j).1 * lane.t_per_cell;
+        (best_t as f64) < t_far
+    }
+}

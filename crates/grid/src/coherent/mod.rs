@@ -1,0 +1,334 @@
+//! Coherent grid traversal (Wald, Ize, Kensler, Knoll, Parker 2006; the survey's §2.2): a packet
+//! of rays walks a grid slice by slice along one axis. In each slice the packet's rays span a
+//! rectangle of cells ([`frustum`]); every occupied cell of it is visited once for the whole
+//! packet and its triangles are tested against every active ray ([`packet_test`]). No packet is
+//! split or merged; a ray leaves the packet when its best hit lies before the slice's far plane
+//! or its segment ends, and the packet ends when no ray is left.
+//!
+//! Exactness: the rectangle holds each ray's own cells in that slice, widened by
+//! [`frustum::SLICE_MARGIN_CELLS`] (more than the rounding of the f32 slice arithmetic and less
+//! than the insertion margin), so every triangle a ray meets before its accepted hit is tested,
+//! and the closest-hit rule (t, then index) is the single-ray one: hits are bit-identical to
+//! single rays and to brute force. A packet-wide mailbox skips a triangle already tested: the
+//! rays still active then were active when it was tested.
+//!
+//! Packets whose rays do not share the sign of one axis (incoherent) are traced as single rays.
+//! The rectangles are computed per ray, not from four corner rays, so any packet works: camera
+//! tiles (common origin), shadow rays towards a point light (common end) or arbitrary rays.
+
+pub mod frustum;
+pub mod packet_test;
+
+use glam::{UVec3, Vec3};
+use gridrt_scene::{Hit, Ray};
+use serde::Serialize;
+
+use crate::flat::FlatGrid;
+use crate::geometry::GridGeometry;
+use crate::macrocell::MacrocellGrid;
+use crate::stats::{BatchStats, RayStats};
+use frustum::{Lane, SliceWalk};
+use packet_test::PacketRays;
+
+/// Edge of the default square packet, in pixels (8×8 = 64 rays).
+pub const DEFAULT_TILE: u32 = 8;
+/// Entries of the packet-wide mailbox (a power of two; a collision only re-tests a triangle).
+pub const PACKET_MAILBOX_SIZE: usize = 256;
+
+/// A grid a packet can walk slice by slice: its geometry and the occupied cells of a box.
+pub trait SliceCells {
+    fn geom(&self) -> &GridGeometry;
+    /// Calls `f` with the references of every occupied cell in the box `lo..=hi` (cell indices,
+    /// within the grid).
+    fn for_each_occupied(&self, lo: UVec3, hi: UVec3, f: &mut impl FnMut(&[u32]));
+}
+
+impl SliceCells for FlatGrid {
+    fn geom(&self) -> &GridGeometry {
+        &self.geom
+    }
+
+    #[inline]
+    fn for_each_occupied(&self, lo: UVec3, hi: UVec3, f: &mut impl FnMut(&[u32])) {
+        let res = self.geom.res;
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                let row = (res.x * (y + res.y * z)) as usize;
+                for x in lo.x..=hi.x {
+                    let i = row + x as usize;
+                    if self.is_occupied(i) {
+                        f(self.cell(i));
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl SliceCells for MacrocellGrid {
+    fn geom(&self) -> &GridGeometry {
+        &self.fine.geom
+    }
+
+    /// Empty macrocells of the box are skipped whole (one bit each).
+    #[inline]
+    fn for_each_occupied(&self, lo: UVec3, hi: UVec3, f: &mut impl FnMut(&[u32])) {
+        let a = self.a;
+        let (mlo, mhi) = (lo / a, hi / a);
+        for mz in mlo.z..=mhi.z {
+            for my in mlo.y..=mhi.y {
+                for mx in mlo.x..=mhi.x {
+                    let m = UVec3::new(mx, my, mz);
+                    if !self.occupied(m) {
+                        continue;
+                    }
+                    let blo = (m * a).max(lo);
+                    let bhi = (m * a + UVec3::splat(a - 1)).min(hi);
+                    self.fine.for_each_occupied(blo, bhi, f);
+                }
+            }
+        }
+    }
+}
+
+/// Packet settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct PacketOptions {
+    /// Packet edge in pixels: a packet is a `tile`×`tile` block of the image.
+    pub tile: u32,
+    /// The packet-wide mailbox.
+    pub mailbox: bool,
+}
+
+impl Default for PacketOptions {
+    fn default() -> Self {
+        PacketOptions { tile: DEFAULT_TILE, mailbox: true }
+    }
+}
+
+/// What the packets of a batch did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct PacketStats {
+    /// Packets walked slice by slice.
+    pub packets: u64,
+    /// Packets traced as single rays (incoherent: no axis whose sign all rays share).
+    pub single_ray_packets: u64,
+    /// Cells visited by packets (each occupied or empty cell of a slice rectangle once).
+    pub cells: u64,
+}
+
+impl PacketStats {
+    pub fn merge(self, o: PacketStats) -> PacketStats {
+        PacketStats {
+            packets: self.packets + o.packets,
+            single_ray_packets: self.single_ray_packets + o.single_ray_packets,
+            cells: self.cells + o.cells,
+        }
+    }
+}
+
+/// One thread's packet state, reused from packet to packet.
+#[derive(Debug)]
+pub struct Packet {
+    lanes: Vec<Lane>,
+    best: Vec<Hit>,
+    /// The running total of cells before each step (indexed by step).
+    cells_before: Vec<u64>,
+    /// Lanes still walking (indices into `lanes`).
+    active: Vec<u32>,
+    rays: PacketRays,
+    mailbox: Box<[u32; PACKET_MAILBOX_SIZE]>,
+}
+
+impl Default for Packet {
+    fn default() -> Self {
+        Packet {
+            lanes: Vec::new(),
+            best: Vec::new(),
+            cells_before: Vec::new(),
+            active: Vec::new(),
+            rays: PacketRays::default(),
+            mailbox: Box::new([u32::MAX; PACKET_MAILBOX_SIZE]),
+        }
+    }
+}
+
+/// How a packet was traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PacketWalk {
+    /// Slice by slice; the number of slice-rectangle cells visited.
+    Coherent { cells: u64 },
+    /// Incoherent: as single rays.
+    SingleRays,
+}
+
+impl Packet {
+    /// Closest hits of `rays` in `grid` (built over `tris`) as one packet, written to `hits` and
+    /// `stats` (same length as `rays`). An incoherent packet calls `single` for each ray.
+    pub fn trace<G: SliceCells>(
+        &mut self,
+        grid: &G,
+        tris: &[[Vec3; 3]],
+        rays: &[Ray],
+        mailbox: bool,
+        hits: &mut [Hit],
+        stats: &mut [RayStats],
+        single: impl Fn(&Ray) -> (Hit, RayStats),
+    ) -> PacketWalk {
+        assert!(rays.len() == hits.len() && rays.len() == stats.len(), "one hit and one stats record per ray");
+        let Some(walk) = SliceWalk::new(grid.geom(), rays, &mut self.lanes, &mut self.active) else {
+            for ((r, h), s) in rays.iter().zip(hits.iter_mut()).zip(stats.iter_mut()) {
+                (*h, *s) = single(r);
+            }
+            return PacketWalk::SingleRays;
+        };
+        self.best.clear();
+        self.best.resize(rays.len(), Hit::MISS);
+        self.mailbox.fill(u32::MAX);
+        self.rays.gather(&self.lanes, &self.active);
+        // Each lane's stats from running totals: cells of the slices since its first, tests of
+        // every triangle tested while it was active.
+        let (mut cells, mut tests) = (0u64, 0u64);
+        self.cells_before.clear();
+        for s in stats.iter_mut() {
+            *s = RayStats::default();
+        }
+        let res = grid.geom().res;
+        let lanes = &self.lanes;
+        let record = |s: &mut RayStats, lane: &frustum::Lane, cells_before: &[u64], cells: u64, tests: u64| {
+            let from = (lane.first as usize).min(cells_before.len());
+            let before = if from < cells_before.len() { cells_before[from] } else { cells };
+            *s = RayStats {
+                cells: (cells - before).min(u32::MAX as u64) as u32,
+                tests: tests.min(u32::MAX as u64) as u32,
+            };
+        };
+        let mut walk = walk;
+        let mut next_check = 0u32;
+        for j in walk.steps() {
+            // cells_before[j]: the running total before step j.
+            while self.cells_before.len() < j as usize {
+                self.cells_before.push(cells);
+            }
+            self.cells_before.push(cells);
+            let Some((lo, hi)) = walk.rect(j, res) else { continue };
+            let tests_before = tests;
+            let n = (hi - lo + UVec3::ONE).as_u64vec3();
+            cells += n.x * n.y * n.z;
+            let (best, mb, rays_soa) = (&mut self.best, &mut self.mailbox, &self.rays);
+            grid.for_each_occupied(lo, hi, &mut |refs| {
+                for &tri in refs {
+                    if mailbox {
+                        let slot = &mut mb[tri as usize & (PACKET_MAILBOX_SIZE - 1)];
+                        if *slot == tri {
+                            continue;
+                        }
+                        *slot = tri;
+                    }
+                    tests += 1;
+                    rays_soa.test(&tris[tri as usize], tri, best);
+                }
+            });
+            // No ray can leave before `next_check` unless a triangle was tested (a new best).
+            if tests == tests_before && j < next_check {
+                continue;
+            }
+            let (best, cb, soa) = (&self.best, &self.cells_before, &mut self.rays);
+            next_check = u32::MAX;
+            let mut dead = 0;
+            self.active.retain(|&i| {
+                let lane = &lanes[i as usize];
+                let t = best[i as usize].t;
+                let ends = walk.ends_ray(j, lane, t);
+                if ends {
+                    record(&mut stats[i as usize], lane, cb, cells, tests);
+                    dead = soa.remove(i);
+                } else {
+                    next_check = next_check.min(walk.earliest_end(lane, t));
+                }
+                !ends
+            });
+            if self.active.is_empty() {
+                break;
+            }
+            // Removed rays are skipped in place; a whole chunk's worth is worth a gather (the
+            // frustum of the remaining rays shrinks with it).
+            if dead >= packet_test::LANES {
+                self.rays.gather(lanes, &self.active);
+                walk.update(lanes, &self.active);
+            }
+        }
+        for &i in &self.active {
+            record(&mut stats[i as usize], &lanes[i as usize], &self.cells_before, cells, tests);
+        }
+        hits.copy_from_slice(&self.best);
+        PacketWalk::Coherent { cells }
+    }
+}
+
+/// Closest hits of an image's rays (`rays` row-major, `width` per row) in `tile`×`tile`
+/// packets, on all threads when `parallel` (and the `parallel` feature): hits in the order of
+/// `rays`, batch and packet figures. `single` traces one ray of an incoherent packet.
+pub fn trace_image<G: SliceCells + Sync>(
+    grid: &G,
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    width: usize,
+    opts: PacketOptions,
+    parallel: bool,
+    single: impl Fn(&Ray) -> (Hit, RayStats) + Sync,
+) -> (Vec<Hit>, BatchStats, PacketStats) {
+    let width = width.max(1);
+    let tile = opts.tile.max(1) as usize;
+    assert!(rays.len().is_multiple_of(width), "an image's rays: a whole number of rows");
+    let mut hits = vec![Hit::MISS; rays.len()];
+    // One band of `tile` rows at a time, its packets left to right.
+    let band = |(rays, hits): (&[Ray], &mut [Hit])| {
+        let rows = rays.len() / width;
+        let mut packet = Packet::default();
+        let (mut pr, mut ph, mut ps) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut batch, mut pstats) = (BatchStats::default(), PacketStats::default());
+        for x0 in (0..width).step_by(tile) {
+            let x1 = (x0 + tile).min(width);
+            pr.clear();
+            for y in 0..rows {
+                pr.extend_from_slice(&rays[y * width + x0..y * width + x1]);
+            }
+            ph.resize(pr.len(), Hit::MISS);
+            ps.resize(pr.len(), RayStats::default());
+            match packet.trace(grid, tris, &pr, opts.mailbox, &mut ph, &mut ps, &single) {
+                PacketWalk::Coherent { cells } => {
+                    pstats.packets += 1;
+                    pstats.cells += cells;
+                }
+                PacketWalk::SingleRays => pstats.single_ray_packets += 1,
+            }
+            for y in 0..rows {
+                let w = x1 - x0;
+                hits[y * width + x0..y * width + x1].copy_from_slice(&ph[y * w..(y + 1) * w]);
+                for k in 0..w {
+                    batch.add(ps[y * w + k], ph[y * w + k].is_hit());
+                }
+            }
+        }
+        (batch, pstats)
+    };
+    let chunk = width * tile;
+    #[cfg(feature = "parallel")]
+    if parallel {
+        use rayon::prelude::*;
+        let (batch, pstats) = rays
+            .par_chunks(chunk)
+            .zip(hits.par_chunks_mut(chunk))
+            .map(band)
+            .reduce(|| (BatchStats::default(), PacketStats::default()), |a, b| (a.0.merge(b.0), a.1.merge(b.1)));
+        return (hits, batch, pstats);
+    }
+    let _ = parallel;
+    let (batch, pstats) = rays
+        .chunks(chunk)
+        .zip(hits.chunks_mut(chunk))
+        .map(band)
+        .fold((BatchStats::default(), PacketStats::default()), |a, b| (a.0.merge(b.0), a.1.merge(b.1)));
+    (hits, batch, pstats)
+}

@@ -1,0 +1,157 @@
+//! Coherent grid traversal: packets give the hits of single rays and of brute force, bit for
+//! bit, for camera images (outside and inside the scene, any tile size, widths that are not a
+//! multiple of it), shadow rays towards a point light and incoherent rays; packets really walk
+//! slice by slice where the rays are coherent.
+
+use glam::Vec3;
+use gridrt_grid::coherent::PacketOptions;
+use gridrt_grid::trace::TraceOptions;
+use gridrt_grid::{AnyGrid, GridConfig, GridKind, structure};
+use gridrt_scene::gltf_load::load_path;
+use gridrt_scene::rays::{image_rays, random_rays};
+use gridrt_scene::{Aabb, Camera, Hit, Ray};
+
+use super::common::*;
+
+/// Shadow rays from each hit towards `light` (an empty ray for a miss), as the renderer makes
+/// them.
+fn shadow_rays(primary: &[Ray], hits: &[Hit], light: Vec3, diagonal: f32) -> Vec<Ray> {
+    primary
+        .iter()
+        .zip(hits)
+        .map(|(r, h)| {
+            if !h.is_hit() {
+                return Ray::new(Vec3::ZERO, Vec3::X, 1.0, 0.0);
+            }
+            let p = r.at(h.t);
+            let to = light - p;
+            Ray::new(p, to, 1e-4 * diagonal / to.length().max(1e-20), 1.0)
+        })
+        .collect()
+}
+
+/// Cameras: the auto view, a close view, one inside the box looking along each axis sign
+/// with a wide field of view, and a grazing view along the bottom face.
+fn cameras(b: &Aabb) -> Vec<Camera> {
+    let c = b.center();
+    let e = b.extent();
+    let mut v = vec![Camera::fit(b, 4.0 / 3.0)];
+    v.push(Camera { eye: c + e * Vec3::new(0.3, 0.2, 0.9), target: c, up: Vec3::Y, vfov_deg: 40.0 });
+    for d in [Vec3::X, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+        v.push(Camera { eye: c + e * 0.05, target: c + d, up: Vec3::Y, vfov_deg: 110.0 });
+    }
+    v.push(Camera {
+        eye: Vec3::new(b.min.x - e.x, b.min.y + e.y * 1e-3, c.z),
+        target: Vec3::new(b.max.x, b.min.y, c.z),
+        up: Vec3::Y,
+        vfov_deg: 30.0,
+    });
+    v
+}
+
+fn grids(tris: &[[Vec3; 3]]) -> Vec<AnyGrid> {
+    GridKind::ALL
+        .into_iter()
+        .map(|kind| structure::build(tris, &GridConfig { kind, ..GridConfig::default() }).unwrap().0)
+        .collect()
+}
+
+/// Every grid × tile size × mailbox on `rays` (an image `width` wide) against `expected`.
+/// Returns the coherent packets walked.
+fn check_packets(
+    name: &str,
+    tris: &[[Vec3; 3]],
+    grids: &[AnyGrid],
+    rays: &[Ray],
+    width: usize,
+    expected: &[Hit],
+) -> u64 {
+    let mut coherent = 0;
+    for grid in grids {
+        for tile in [1, 4, 8, 16] {
+            for mailbox in [true, false] {
+                let packets = PacketOptions { tile, mailbox };
+                let (hits, stats, ps) = grid.trace_packets(
+                    tris,
+                    rays,
+                    width,
+                    TraceOptions { mailbox, ..Default::default() },
+                    packets,
+                    true,
+                );
+                assert_same_hits(
+                    &format!("{name} {} tile {tile} mailbox={mailbox}", grid.kind()),
+                    rays,
+                    expected,
+                    &hits,
+                );
+                assert_eq!(stats.rays as usize, rays.len());
+                if grid.has_packets() {
+                    let tiles = (width.div_ceil(tile as usize) * (rays.len() / width).div_ceil(tile as usize)) as u64;
+                    assert_eq!(ps.packets + ps.single_ray_packets, tiles, "{name}: every tile is one packet");
+                }
+                coherent += ps.packets;
+            }
+        }
+    }
+    coherent
+}
+
+fn check_scene_images(name: &str, tris: &[[Vec3; 3]], width: u32, height: u32) {
+    let b = gridrt_grid::triangle_bounds(tris);
+    let grids = grids(tris);
+    let light = b.center() + b.extent() * Vec3::new(0.4, 1.5, 0.3);
+    for (k, cam) in cameras(&b).iter().enumerate() {
+        let rays = image_rays(cam, width, height);
+        let (expected, st) = reference(tris, &rays);
+        let coherent = check_packets(&format!("{name} camera {k}"), tris, &grids, &rays, width as usize, &expected);
+        assert!(coherent > 0, "{name} camera {k}: no packet walked slice by slice");
+        let shadow = shadow_rays(&rays, &expected, light, b.diagonal());
+        let (shadow_expected, sst) = reference(tris, &shadow);
+        let sc = check_packets(
+            &format!("{name} camera {k} shadows"),
+            tris,
+            &grids,
+            &shadow,
+            width as usize,
+            &shadow_expected,
+        );
+        println!("{name} camera {k}: {} hits, {} shadowed; {coherent} + {sc} coherent packets", st.hits, sst.hits);
+    }
+}
+
+#[test]
+fn packets_equal_single_rays_and_brute_force_on_procedural_scenes() {
+    for (name, g) in procedural_scenes() {
+        let tris = g.mesh.triangles();
+        check_scene_images(&name, &tris, 37, 29);
+    }
+}
+
+#[test]
+fn incoherent_packets_fall_back_to_single_rays() {
+    let (_, g) = procedural_scenes().remove(0);
+    let tris = g.mesh.triangles();
+    let b = g.mesh.bounds();
+    let rays = random_rays(&b, 32 * 32, 7);
+    let (expected, _) = reference(&tris, &rays);
+    let grid = structure::build(&tris, &GridConfig::default()).unwrap().0;
+    let (hits, _, ps) =
+        grid.trace_packets(&tris, &rays, 32, TraceOptions::default(), PacketOptions { tile: 8, mailbox: true }, false);
+    assert_same_hits("random rays in packets", &rays, &expected, &hits);
+    assert_eq!(ps.packets + ps.single_ray_packets, 16);
+    assert!(ps.single_ray_packets >= 12, "random directions: most packets are incoherent ({ps:?})");
+}
+
+#[test]
+fn packets_equal_brute_force_on_shared_scenes() {
+    let scenes = shared_scenes();
+    // Each shared scene in the full matrix; a sample of three by default.
+    let step = if full_matrices() { 1 } else { (scenes.len() / 3).max(1) };
+    for path in scenes.iter().step_by(step) {
+        let mesh = load_path(path).unwrap().0;
+        let tris = mesh.triangles();
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        check_scene_images(&name, &tris, 24, 18);
+    }
+}
