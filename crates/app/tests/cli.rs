@@ -758,3 +758,59 @@ fn build_on_the_gpu_matches_the_cpu_digest() {
     fails(&["build", s(&scene), "--grid", "multires", "--backend", "gpu"], "use the CPU build");
     fails(&["build", s(&scene), "--exact", "--backend", "gpu"], "use the CPU build");
 }
+
+#[test]
+fn cpu_render_with_and_without_packets_gives_the_same_hits() {
+    let scene = tmp("packets-tis.glb");
+    ok(&["gen", "teapot-in-stadium", "--size", "1", "-o", s(&scene)]);
+    let trace_hits = tmp("packets-trace.hits");
+    for grid in ["flat", "macrocell", "multires"] {
+        let mut hits = Vec::new();
+        for packets in ["on", "off"] {
+            let (png, h, r) = (tmp("packets.png"), tmp(&format!("{grid}-{packets}.hits")), tmp("packets.rays"));
+            let out = ok(&[
+                "render",
+                s(&scene),
+                "--backend",
+                "cpu",
+                "--packets",
+                packets,
+                "--grid",
+                grid,
+                "--size",
+                "97x61",
+                "--camera",
+                "framed",
+                "--hits-out",
+                s(&h),
+                "--rays-out",
+                s(&r),
+                "--json",
+                "-o",
+                s(&png),
+            ]);
+            let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+            assert_eq!(v["rays"], 97 * 61, "{out}");
+            assert!(v["primary_ms"].as_f64().unwrap() > 0.0 && v["shadow_ms"].as_f64().unwrap() > 0.0, "{out}");
+            let walked = v["packets"].as_u64().unwrap();
+            match (grid, packets) {
+                // 13 × 8 tiles of 8×8, primary and shadow passes.
+                ("flat" | "macrocell", "on") => assert!(walked > 0 && walked <= 2 * 13 * 8, "{out}"),
+                _ => assert_eq!(walked, 0, "{out}"),
+            }
+            let img = image::open(&png).unwrap().to_rgba8();
+            assert_eq!(img.dimensions(), (97, 61));
+            // Brute force over the written rays gives the same hits.
+            ok(&["trace", s(&scene), "--rays", s(&r), "--backend", "brute", "-o", s(&trace_hits)]);
+            assert_eq!(std::fs::read(&h).unwrap(), std::fs::read(&trace_hits).unwrap(), "{grid} packets {packets}");
+            hits.push(std::fs::read(&h).unwrap());
+        }
+        assert_eq!(hits[0], hits[1], "{grid}: packets change the hits");
+    }
+    fails(
+        &["render", s(&scene), "--backend", "cpu", "--view", "heatmap-cells", "-o", s(&tmp("h.png"))],
+        "--packets off",
+    );
+    let out = ok(&["render", s(&scene), "--backend", "cpu", "--size", "64x48", "-o", s(&tmp("p.png"))]);
+    assert!(out.contains("8x8 packets"), "{out}");
+}

@@ -70,6 +70,9 @@ pub struct SliceWalk {
     last: u32,
     /// The reference plane of the lines' intercepts.
     s_ref: f64,
+    /// About the cells the rays cross one by one (the sum of their segments' lengths in cells,
+    /// one axis after another).
+    single_ray_cells: f64,
     bounds: Bounds,
 }
 
@@ -127,6 +130,7 @@ impl SliceWalk {
         let positive = mean[axis] > 0.0;
         let res = geom.res[axis];
         let (mut first, mut last) = (u32::MAX, 0u32);
+        let mut single_ray_cells = 0.0;
         for l in lanes.iter_mut().filter(|l| l.ray.is_some()) {
             if !(l.d[axis] != 0.0 && (l.d[axis] > 0.0) == positive) {
                 return None;
@@ -137,6 +141,8 @@ impl SliceWalk {
             let m = SLICE_MARGIN_CELLS;
             let (a, b) = if positive { (slice(e - m), slice(x + m)) } else { (slice(e + m), slice(x - m)) };
             (l.first, l.last) = (step(a), step(b));
+            let len = (l.t1 - l.t0) as f64;
+            single_ray_cells += 1.0 + l.d.iter().map(|d| (d * len).abs()).sum::<f64>();
             l.t_per_cell = 1.0 / l.d[axis];
             l.slope = [(axis + 1) % 3, (axis + 2) % 3].map(|u| l.d[u] * l.t_per_cell);
             l.t_at_0 = -l.o[axis] * l.t_per_cell;
@@ -150,6 +156,7 @@ impl SliceWalk {
             first,
             last,
             s_ref: 0.0,
+            single_ray_cells,
             bounds: Bounds { c_lo: [0.0; 2], c_hi: [0.0; 2], slope_lo: [0.0; 2], slope_hi: [0.0; 2] },
         };
         // The reference plane: the first ray's origin or its end, whichever the rays are
@@ -168,6 +175,24 @@ impl SliceWalk {
         walk.s_ref = best.1;
         walk.update(lanes, active);
         Some(walk)
+    }
+
+    /// Whether walking the rays as a packet visits fewer cells than `ratio` times the cells
+    /// they cross one by one: the frustum of rays that start or end far apart (shadow rays
+    /// from different depths, tiles over silhouettes) can cover many more cells than the rays.
+    pub fn coherent_enough(&self, res: UVec3, ratio: f64) -> bool {
+        let budget = ratio * self.single_ray_cells;
+        let mut cells = 0.0;
+        for j in self.steps() {
+            if let Some((lo, hi)) = self.rect(j, res) {
+                let n = (hi - lo + UVec3::ONE).as_dvec3();
+                cells += n.x * n.y * n.z;
+                if cells > budget {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Recomputes the frustum's bounds over the `active` lanes.
@@ -197,7 +222,8 @@ impl SliceWalk {
 
     /// The walk's steps (empty when no ray is valid).
     pub fn steps(&self) -> std::ops::RangeInclusive<u32> {
-        if self.first > self.last { 1..=0 } else { self.first..=self.last }
+        // Empty when no ray is valid (first = u32::MAX > last = 0).
+        self.first..=self.last
     }
 
     /// The slice index of step `j`.
