@@ -262,6 +262,15 @@ pub fn read_back<T: bytemuck::Pod>(
     what: &'static str,
 ) -> Result<Vec<T>, GpuError> {
     let [slice] = map_for_reading(ctx, [(buffer, size)], what)?;
+    copy_mapped(buffer, slice, what)
+}
+
+/// The `T`s of a mapped `slice` of `buffer`, which is unmapped afterwards.
+fn copy_mapped<T: bytemuck::Pod>(
+    buffer: &wgpu::Buffer,
+    slice: wgpu::BufferSlice<'_>,
+    what: &'static str,
+) -> Result<Vec<T>, GpuError> {
     let view = slice.get_mapped_range().map_err(|e| GpuError::Readback { what, detail: e.to_string() })?;
     let out = bytemuck::cast_slice(&view).to_vec();
     drop(view);
@@ -294,11 +303,7 @@ pub async fn read_back_async<T: bytemuck::Pod>(
     #[cfg(target_arch = "wasm32")]
     let _ = ctx;
     MapFuture(state).await.map_err(|e| err(&e))?;
-    let view = slice.get_mapped_range().map_err(|e| err(&e))?;
-    let out = bytemuck::cast_slice(&view).to_vec();
-    drop(view);
-    buffer.unmap();
-    Ok(out)
+    copy_mapped(buffer, slice, what)
 }
 
 /// A buffer mapping's outcome and the task waiting for it.

@@ -62,7 +62,7 @@ impl FlatGrid {
 
     /// The references of cell `index`, read from `cell_start` (no occupancy check).
     #[inline]
-    fn refs_of(&self, index: usize) -> &[u32] {
+    pub(crate) fn refs_of(&self, index: usize) -> &[u32] {
         &self.refs[self.cell_start[index] as usize..self.cell_start[index + 1] as usize]
     }
 

@@ -12,22 +12,25 @@
 /// Entries in the table (a power of two).
 pub const MAILBOX_SIZE: usize = 16;
 
+/// A table of `N` entries (a power of two): [`MAILBOX_SIZE`] for one ray, more for a packet of
+/// rays ([`crate::coherent`]).
 #[derive(Clone, Debug)]
-pub struct Mailbox {
-    ids: [u32; MAILBOX_SIZE],
+pub struct Mailbox<const N: usize = MAILBOX_SIZE> {
+    ids: [u32; N],
 }
 
-impl Default for Mailbox {
+impl<const N: usize> Default for Mailbox<N> {
     fn default() -> Self {
-        Mailbox { ids: [u32::MAX; MAILBOX_SIZE] }
+        const { assert!(N.is_power_of_two()) };
+        Mailbox { ids: [u32::MAX; N] }
     }
 }
 
-impl Mailbox {
+impl<const N: usize> Mailbox<N> {
     /// True if `tri` was already tested; otherwise records it and returns false.
     #[inline]
     pub fn check_and_insert(&mut self, tri: u32) -> bool {
-        let slot = tri as usize & (MAILBOX_SIZE - 1);
+        let slot = tri as usize & (N - 1);
         if self.ids[slot] == tri {
             return true;
         }

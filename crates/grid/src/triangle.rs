@@ -78,6 +78,11 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     Some(TriHit { t, u: (v / det) as f32, v: (w / det) as f32 })
 }
 
+/// The bound on an f32 edge function's rounding error is `(|p| + |q|)·EDGE_ERROR_SCALE +
+/// EDGE_ERROR_FLOOR` (see [`certainly_outside`]); the packet pre-filter uses the same bound.
+pub const EDGE_ERROR_SCALE: f32 = 1.0 / (1u32 << 22) as f32;
+pub const EDGE_ERROR_FLOOR: f32 = f32::MIN_POSITIVE;
+
 /// Whether the sheared 2-D corners `a`, `b`, `c` certainly leave the origin outside: the edge
 /// functions in f32, each with a bound on its rounding error, show two of them with certain,
 /// opposite signs. Never true when the exact test would find the origin inside (the f64 signs
@@ -90,10 +95,9 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
 /// overflow makes the bound infinite or a value NaN, and every comparison with them false.
 #[inline]
 pub fn certainly_outside(a: [f32; 2], b: [f32; 2], c: [f32; 2]) -> bool {
-    const FOUR_EPS: f32 = 1.0 / (1u32 << 22) as f32;
     let edge = |x: f32, y: f32, z: f32, w: f32| {
         let (p, q) = (x * y, z * w);
-        (p - q, (p.abs() + q.abs()) * FOUR_EPS + f32::MIN_POSITIVE)
+        (p - q, (p.abs() + q.abs()) * EDGE_ERROR_SCALE + EDGE_ERROR_FLOOR)
     };
     let (u, eu) = edge(c[0], b[1], c[1], b[0]);
     let (v, ev) = edge(a[0], c[1], a[1], c[0]);

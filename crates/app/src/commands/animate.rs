@@ -8,12 +8,11 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use gridrt_gpu::{GpuSession, RenderOptions};
-use rayon::prelude::*;
 use serde::Serialize;
 
 use super::build_grid;
 use crate::cli::{AnimateArgs, Device};
-use crate::lab::animation::{FixedView, shadow_rays};
+use crate::lab::animation::FixedView;
 use crate::lab::report::{Chart, Series, progress, save_chart, write_rows};
 use gridrt_scene::Player;
 
@@ -103,10 +102,13 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         let (primary_hits, shadowed, traced, rgba) = match &ctx {
             None => {
                 let (hits, st) = grid.trace_batch(tris, primary, trace_opts, true);
-                shadow_rays(shade, primary, &hits, &mut shadow);
+                crate::lab::frame::shadow_rays_from_hits(shade, primary, &hits, &mut shadow);
                 let (shadow_hits, sst) = grid.trace_batch(tris, &shadow, trace_opts, true);
                 let traced = Instant::now();
-                let rgba = args.frames_dir.as_ref().map(|_| cpu_pixels(tris, shade, primary, &hits, &shadow_hits));
+                let rgba = args
+                    .frames_dir
+                    .as_ref()
+                    .map(|_| crate::lab::frame::shade_pixels(shade, tris, primary, &hits, None, &shadow_hits));
                 (st.hits, Some(sst.hits), traced, rgba)
             }
             Some(ctx) => {
@@ -197,27 +199,6 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         println!("timeline: {}", out.join("timeline.{csv,json,svg,png}").display());
     }
     Ok(())
-}
-
-/// The shaded image from CPU hits (the CPU port of shade.wgsl), for PNG frames.
-fn cpu_pixels(
-    tris: &[[glam::Vec3; 3]],
-    shade: &gridrt_gpu::layout::ShadeParams,
-    primary: &[gridrt_scene::Ray],
-    hits: &[gridrt_scene::Hit],
-    shadow_hits: &[gridrt_scene::Hit],
-) -> Vec<u8> {
-    let stats = gridrt_grid::RayStats::default();
-    (0..primary.len())
-        .into_par_iter()
-        .map(|i| {
-            let tri = if hits[i].is_hit() { tris[hits[i].triangle as usize] } else { [glam::Vec3::ZERO; 3] };
-            gridrt_gpu::cpu::shade_pixel(shade, &primary[i], &hits[i], &stats, &shadow_hits[i], tri)
-        })
-        .collect::<Vec<u32>>()
-        .into_iter()
-        .flat_map(u32::to_le_bytes)
-        .collect()
 }
 
 fn timeline_chart(source: &str, grid: &str, rows: &[FrameRow]) -> Chart {

@@ -204,20 +204,12 @@ fn cpu_frame(
     let (hits, stats, batch, ps) = trace(primary);
     let primary_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
-    let shadow: Vec<Ray> =
-        primary.par_iter().zip(&hits).map(|(r, h)| gridrt_gpu::cpu::shadow_ray(&shade, r, h)).collect();
+    let mut shadow = Vec::new();
+    crate::lab::frame::shadow_rays_from_hits(&shade, primary, &hits, &mut shadow);
     let (shadow_hits, _, _, sps) = trace(&shadow);
     let shadow_ms = start.elapsed().as_secs_f64() * 1e3;
-    let none = gridrt_grid::RayStats::default();
-    let rgba: Vec<u8> = (0..primary.len())
-        .into_par_iter()
-        .map(|i| {
-            let tri = if hits[i].is_hit() { tris[hits[i].triangle as usize] } else { [glam::Vec3::ZERO; 3] };
-            let s = stats.get(i).unwrap_or(&none);
-            gridrt_gpu::cpu::shade_pixel(&shade, &primary[i], &hits[i], s, &shadow_hits[i], tri).to_le_bytes()
-        })
-        .flatten_iter()
-        .collect();
+    let stats = per_ray.then_some(&stats[..]);
+    let rgba = crate::lab::frame::shade_pixels(&shade, tris, primary, &hits, stats, &shadow_hits);
     Rendered {
         rgba,
         hits,

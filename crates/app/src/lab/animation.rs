@@ -1,12 +1,11 @@
 //! What `gridrt animate` and `gridrt bench --dynamic` see an animation with: a view (camera,
-//! light, primary rays) fixed over the whole clip, and the CPU shadow rays. The posing itself
-//! is [`gridrt_scene::Player`].
+//! light, primary rays) fixed over the whole clip. The posing itself is
+//! [`gridrt_scene::Player`]; the CPU frame is [`super::frame`]'s.
 
 use gridrt_gpu::RenderOptions;
 use gridrt_gpu::layout::ShadeParams;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_scene::{Aabb, Hit, Ray};
-use rayon::prelude::*;
+use gridrt_scene::{Aabb, Ray};
 
 /// What every frame of a clip is seen with: the shaded render's options (camera framing the
 /// clip's bounds), its light and shading constants, and its primary rays.
@@ -29,10 +28,4 @@ impl FixedView {
     pub fn trace_options(&self) -> TraceOptions {
         TraceOptions { traversal: self.opts.traversal, mailbox: self.opts.mailbox }
     }
-}
-
-/// shaders/shadow.wgsl's shadow rays (the CPU port), for every primary ray, in parallel.
-pub fn shadow_rays(shade: &ShadeParams, primary: &[Ray], hits: &[Hit], out: &mut Vec<Ray>) {
-    out.clear();
-    primary.par_iter().zip(hits).map(|(r, h)| gridrt_gpu::cpu::shadow_ray(shade, r, h)).collect_into_vec(out);
 }

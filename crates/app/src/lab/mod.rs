@@ -2,6 +2,7 @@
 //! timing, the machine's description) and reports (tables, CSV/JSON rows, charts).
 
 pub mod animation;
+pub mod frame;
 pub mod report;
 pub mod scenes;
 pub mod sweep;

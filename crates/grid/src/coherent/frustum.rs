@@ -42,6 +42,21 @@ pub struct Lane {
 }
 
 impl Lane {
+    /// A ray that misses the grid or that no triangle can be hit by (the walk-axis fields are
+    /// set once the axis is chosen).
+    const INVALID: Lane = Lane {
+        ray: None,
+        o: [0.0; 3],
+        d: [1.0, 0.0, 0.0],
+        t0: 0.0,
+        t1: 0.0,
+        slope: [0.0; 2],
+        t_at_0: 0.0,
+        t_per_cell: 0.0,
+        first: 0,
+        last: 0,
+    };
+
     /// Whether the walk has reached the ray's first slice at step `j`.
     #[inline]
     pub fn started(&self, j: u32) -> bool {
@@ -98,31 +113,9 @@ impl SliceWalk {
                         let end = (r.tmax.is_finite()).then(|| std::array::from_fn(|k| o[k] + d[k] * r.tmax as f64));
                         ends = (Some(o), end);
                     }
-                    Lane {
-                        ray: Some(ray),
-                        o,
-                        d,
-                        t0: g.t0,
-                        t1: g.t1,
-                        slope: [0.0; 2],
-                        t_at_0: 0.0,
-                        t_per_cell: 0.0,
-                        first: 0,
-                        last: 0,
-                    }
+                    Lane { ray: Some(ray), o, d, t0: g.t0, t1: g.t1, ..Lane::INVALID }
                 }
-                None => Lane {
-                    ray: None,
-                    o: [0.0; 3],
-                    d: [1.0, 0.0, 0.0],
-                    t0: 0.0,
-                    t1: 0.0,
-                    slope: [0.0; 2],
-                    t_at_0: 0.0,
-                    t_per_cell: 0.0,
-                    first: 0,
-                    last: 0,
-                },
+                None => Lane::INVALID,
             };
             lanes.push(lane);
         }

@@ -26,6 +26,7 @@ use serde::Serialize;
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
 use crate::macrocell::MacrocellGrid;
+use crate::mailbox::Mailbox;
 use crate::stats::{BatchStats, RayStats};
 use frustum::{Lane, SliceWalk};
 use packet_test::PacketRays;
@@ -63,7 +64,7 @@ impl SliceCells for FlatGrid {
                 for x in lo.x..=hi.x {
                     let i = row + x as usize;
                     if self.is_occupied(i) {
-                        f(self.cell(i));
+                        f(self.refs_of(i));
                     }
                 }
             }
@@ -117,10 +118,9 @@ impl Default for PacketOptions {
 pub struct PacketStats {
     /// Packets walked slice by slice.
     pub packets: u64,
-    /// Packets traced as single rays (incoherent: no axis whose sign all rays share).
+    /// Packets traced as single rays (incoherent: no axis whose sign all rays share, or a
+    /// frustum that would visit more cells than the rays one by one).
     pub single_ray_packets: u64,
-    /// Cells visited by packets (each occupied or empty cell of a slice rectangle once).
-    pub cells: u64,
 }
 
 impl PacketStats {
@@ -128,13 +128,12 @@ impl PacketStats {
         PacketStats {
             packets: self.packets + o.packets,
             single_ray_packets: self.single_ray_packets + o.single_ray_packets,
-            cells: self.cells + o.cells,
         }
     }
 }
 
 /// One thread's packet state, reused from packet to packet.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct Packet {
     lanes: Vec<Lane>,
     best: Vec<Hit>,
@@ -143,27 +142,14 @@ pub struct Packet {
     /// Lanes still walking (indices into `lanes`).
     active: Vec<u32>,
     rays: PacketRays,
-    mailbox: Box<[u32; PACKET_MAILBOX_SIZE]>,
-}
-
-impl Default for Packet {
-    fn default() -> Self {
-        Packet {
-            lanes: Vec::new(),
-            best: Vec::new(),
-            cells_before: Vec::new(),
-            active: Vec::new(),
-            rays: PacketRays::default(),
-            mailbox: Box::new([u32::MAX; PACKET_MAILBOX_SIZE]),
-        }
-    }
+    mailbox: Mailbox<PACKET_MAILBOX_SIZE>,
 }
 
 /// How a packet was traced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PacketWalk {
-    /// Slice by slice; the number of slice-rectangle cells visited.
-    Coherent { cells: u64 },
+    /// Slice by slice.
+    Coherent,
     /// Incoherent: as single rays.
     SingleRays,
 }
@@ -183,7 +169,7 @@ impl Packet {
         assert!(rays.len() == hits.len() && rays.len() == stats.len(), "one hit and one stats record per ray");
         let walk = SliceWalk::new(grid.geom(), rays, &mut self.lanes, &mut self.active)
             .filter(|w| w.coherent_enough(grid.geom().res, COHERENCE_RATIO));
-        let Some(walk) = walk else {
+        let Some(mut walk) = walk else {
             for ((r, h), s) in rays.iter().zip(hits.iter_mut()).zip(stats.iter_mut()) {
                 (*h, *s) = single(r);
             }
@@ -191,26 +177,22 @@ impl Packet {
         };
         self.best.clear();
         self.best.resize(rays.len(), Hit::MISS);
-        self.mailbox.fill(u32::MAX);
+        self.mailbox = Mailbox::default();
         self.rays.gather(&self.lanes, &self.active);
         // Each lane's stats from running totals: cells of the slices since its first, tests of
         // every triangle tested while it was active.
         let (mut cells, mut tests) = (0u64, 0u64);
         self.cells_before.clear();
-        for s in stats.iter_mut() {
-            *s = RayStats::default();
-        }
+        stats.fill(RayStats::default());
         let res = grid.geom().res;
         let lanes = &self.lanes;
         let record = |s: &mut RayStats, lane: &frustum::Lane, cells_before: &[u64], cells: u64, tests: u64| {
-            let from = (lane.first as usize).min(cells_before.len());
-            let before = if from < cells_before.len() { cells_before[from] } else { cells };
+            let before = cells_before.get(lane.first as usize).copied().unwrap_or(cells);
             *s = RayStats {
                 cells: (cells - before).min(u32::MAX as u64) as u32,
                 tests: tests.min(u32::MAX as u64) as u32,
             };
         };
-        let mut walk = walk;
         let mut next_check = 0u32;
         for j in walk.steps() {
             // cells_before[j]: the running total before step j.
@@ -225,12 +207,8 @@ impl Packet {
             let (best, mb, rays_soa) = (&mut self.best, &mut self.mailbox, &self.rays);
             grid.for_each_occupied(lo, hi, &mut |refs| {
                 for &tri in refs {
-                    if mailbox {
-                        let slot = &mut mb[tri as usize & (PACKET_MAILBOX_SIZE - 1)];
-                        if *slot == tri {
-                            continue;
-                        }
-                        *slot = tri;
+                    if mailbox && mb.check_and_insert(tri) {
+                        continue;
                     }
                     tests += 1;
                     rays_soa.test(&tris[tri as usize], tri, best);
@@ -269,7 +247,7 @@ impl Packet {
             record(&mut stats[i as usize], &lanes[i as usize], &self.cells_before, cells, tests);
         }
         hits.copy_from_slice(&self.best);
-        PacketWalk::Coherent { cells }
+        PacketWalk::Coherent
     }
 }
 
@@ -304,10 +282,7 @@ pub fn trace_image<G: SliceCells + Sync>(
             ph.resize(pr.len(), Hit::MISS);
             ps.resize(pr.len(), RayStats::default());
             match packet.trace(grid, tris, &pr, opts.mailbox, (&mut ph, &mut ps), &single) {
-                PacketWalk::Coherent { cells } => {
-                    pstats.packets += 1;
-                    pstats.cells += cells;
-                }
+                PacketWalk::Coherent => pstats.packets += 1,
                 PacketWalk::SingleRays => pstats.single_ray_packets += 1,
             }
             for y in 0..rows {

@@ -154,8 +154,8 @@ impl PacketRays {
 /// certainly outside.
 #[inline]
 fn certainly_outside8(a: [f32x8; 2], b: [f32x8; 2], c: [f32x8; 2]) -> f32x8 {
-    let four_eps = f32x8::splat(1.0 / (1u32 << 22) as f32);
-    let tiny = f32x8::splat(f32::MIN_POSITIVE);
+    let four_eps = f32x8::splat(crate::triangle::EDGE_ERROR_SCALE);
+    let tiny = f32x8::splat(crate::triangle::EDGE_ERROR_FLOOR);
     let edge = |x: f32x8, y: f32x8, z: f32x8, w: f32x8| {
         let (p, q) = (x * y, z * w);
         (p - q, (p.abs() + q.abs()) * four_eps + tiny)

@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use super::agree;
 use crate::cli::BenchArgs;
-use crate::lab::animation::{FixedView, shadow_rays};
+use crate::lab::animation::FixedView;
 use crate::lab::report::{print_table, progress, write_rows};
 use crate::lab::scenes::{default_scenes, gltf_files};
 use gridrt_scene::Player;
@@ -286,7 +286,7 @@ fn bench_scene(
             let built_at = Instant::now();
             let hits = built.trace(tris, primary, trace_opts);
             if reference.is_none() {
-                shadow_rays(&view.shade, primary, &hits, &mut shadow);
+                crate::lab::frame::shadow_rays_from_hits(&view.shade, primary, &hits, &mut shadow);
             }
             let shadow_hits = built.trace(tris, &shadow, trace_opts);
             let traced = Instant::now();
