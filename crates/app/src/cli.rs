@@ -450,7 +450,8 @@ pub struct ExperimentArgs {
     /// Which experiment: fig5 (time, N_m and memory against m per scene kind, with the cost
     /// model), bresenham (cells a naive Bresenham misses), models (fastest m against N for
     /// point- and line-like scenes), hierarchy (the five structures side by side),
-    /// cost-constants (Tsetup, Tstep, Tinter fitted on this machine).
+    /// cost-constants (Tsetup, Tstep, Tinter fitted on this machine), cgt (coherent packets
+    /// against single rays by scene, packet size and resolution).
     #[arg(value_enum)]
     pub name: ExperimentName,
     /// Folder of .glb scenes with a manifest.json giving each file's kind (fig5; default:
@@ -469,7 +470,7 @@ pub struct ExperimentArgs {
     /// Skip the GPU measurements (fig5).
     #[arg(long)]
     pub no_gpu: bool,
-    /// fig5: use the procedural stand-in scenes even when a scenes folder exists.
+    /// fig5, hierarchy, cgt: use the procedural stand-in scenes even when a scenes folder exists.
     #[arg(long, conflicts_with = "scenes")]
     pub procedural: bool,
     /// cost-constants: save the fitted CPU constants as the calibration the command line's
@@ -486,6 +487,7 @@ pub enum ExperimentName {
     Models,
     Hierarchy,
     CostConstants,
+    Cgt,
 }
 
 #[derive(Debug, Args)]
@@ -532,6 +534,10 @@ pub struct BenchArgs {
     /// frame, tracing 512×512 primary and shadow rays.
     #[arg(long)]
     pub dynamic: bool,
+    /// Edge of the CPU's square ray packets on the camera sets, in pixels (the flat, macrocell
+    /// and proximity grids get a packet row each; --dynamic's packet rows use it too).
+    #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub tile: u32,
     /// Frames per animated scene (evenly over its first clip) with --dynamic.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub frames: u32,

@@ -344,6 +344,7 @@ fn experiments_write_rows_and_charts() {
         ("models", &[][..]),
         ("fig5", &["--procedural"][..]),
         ("hierarchy", &["--procedural"][..]),
+        ("cgt", &["--procedural"][..]),
     ] {
         let mut args = vec!["experiment", name, "--quick", "--out", s(&out)];
         args.extend_from_slice(extra);
@@ -364,6 +365,9 @@ fn experiments_write_rows_and_charts() {
         "fig5-sphereflakeprocedural-time",
         "fig5-particlesprocedural-size",
         "hierarchy-cpu-mrays",
+        "cgt-speedup",
+        "cgt-tile",
+        "cgt-resolution",
     ];
     let gpu_charts = if skip_gpu() { &[][..] } else { &["hierarchy-gpu-mrays"][..] };
     for chart in charts.iter().chain(gpu_charts) {
@@ -376,6 +380,13 @@ fn experiments_write_rows_and_charts() {
         serde_json::from_str(&std::fs::read_to_string(out.join("fig5.json")).unwrap()).unwrap();
     let autos = fig5.as_array().unwrap().iter().filter(|r| r["auto"] == true).count();
     assert_eq!(autos, 2, "two procedural scenes, one auto m each");
+    // cgt: every image traced single and in packets, the packets' hits equal bit for bit.
+    let cgt: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cgt.json")).unwrap()).unwrap();
+    let rows = cgt.as_array().unwrap();
+    // 2 scenes × 2 grids × 2 ray kinds: at 96² single + 8×8, at 192² single + 4×4 + 8×8.
+    assert_eq!(rows.len(), 2 * 2 * 2 * 5, "{rows:?}");
+    assert!(rows.iter().all(|r| r["mismatches"] == 0 && r["ms"].as_f64().unwrap() > 0.0));
+    assert!(rows.iter().any(|r| r["tile"] == 8 && r["packets"].as_u64().unwrap() > 0), "some packets walked");
     let hier: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("hierarchy.json")).unwrap()).unwrap();
     let rows = hier.as_array().unwrap();

@@ -108,12 +108,12 @@ impl GridRay {
     pub fn clipped(o: Vec3, mut d: Vec3, res: UVec3, tmin: f32, tmax: f32) -> Option<GridRay> {
         // A component so small that its reciprocal overflows is treated as exactly parallel,
         // by the clip and by every walker (they test `d[a] == 0`).
+        let mut inv_d = Vec3::ONE / d;
         for a in 0..3 {
-            if !(1.0 / d[a]).is_finite() {
-                d[a] = 0.0;
+            if !inv_d[a].is_finite() {
+                (d[a], inv_d[a]) = (0.0, f32::INFINITY);
             }
         }
-        let inv_d = Vec3::ONE / d;
         let res = res.as_vec3();
         let mut t0 = tmin;
         let mut t1 = tmax;

@@ -93,6 +93,13 @@ pub fn random_rays(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
         .collect()
 }
 
+/// A whole image of about `count` pixels at `aspect` (width / height): its width and height,
+/// each at least 1 (the rays of an image whose packets tile it).
+pub fn image_size(count: usize, aspect: f64) -> (u32, u32) {
+    let width = ((count as f64 * aspect).sqrt().round() as u32).max(1);
+    (width, (count as u32 / width).max(1))
+}
+
 /// Image size with about `count` pixels at 4:3, and the rays of the first `count` pixels in
 /// row-major order (primary rays).
 pub fn camera_rays(camera: &Camera, count: usize) -> Vec<Ray> {

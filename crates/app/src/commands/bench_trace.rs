@@ -8,7 +8,7 @@ use gridrt_gpu::GpuSession;
 use gridrt_grid::PacketOptions;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_scene::Camera;
-use gridrt_scene::rays::{image_rays, random_rays};
+use gridrt_scene::rays::{image_rays, image_size, random_rays};
 use serde_json::json;
 
 use super::build_grid;
@@ -24,8 +24,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let gs = gpu.upload(&grid)?;
     let opts = TraceOptions { traversal: args.traversal, mailbox: true };
     // Camera rays as whole 4:3 images of about `--rays` pixels, so packets tile them.
-    let width = ((args.rays as f64 * 4.0 / 3.0).sqrt().round() as u32).max(1);
-    let height = (args.rays as u32 / width).max(1);
+    let (width, height) = image_size(args.rays, 4.0 / 3.0);
     let framed = crate::lab::views::framed_camera(&tris, &b, &grid, width as f32 / height as f32);
     let image = |cam: &Camera| Some(image_rays(cam, width, height));
     let sets = [

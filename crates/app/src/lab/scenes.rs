@@ -26,6 +26,42 @@ pub fn default_scenes() -> Option<PathBuf> {
         .find(|p| p.join("manifest.json").is_file())
 }
 
+/// Every scene of `dir`'s manifest.json, or every .glb/.gltf in `dir` without one, by triangle
+/// count (`quick`: the two smallest). Scenes without triangles are skipped, with a note.
+pub fn every_scene(dir: &Path, quick: bool) -> anyhow::Result<Vec<LabScene>> {
+    let manifest: Vec<serde_json::Value> = match std::fs::read_to_string(dir.join("manifest.json")) {
+        Ok(text) => serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}/manifest.json: {e}", dir.display()))?,
+        Err(_) => Vec::new(),
+    };
+    let mut files: Vec<(String, String)> = manifest
+        .iter()
+        .filter_map(|e| Some((e["file"].as_str()?.to_string(), e["kind"].as_str().unwrap_or("unknown").to_string())))
+        .collect();
+    if files.is_empty() {
+        let found = gltf_files(dir).map_err(|e| anyhow::anyhow!("reading {}: {e}", dir.display()))?;
+        files.extend(
+            found.iter().filter_map(|p| Some((p.file_name()?.to_string_lossy().into_owned(), "unknown".into()))),
+        );
+    }
+    files.sort();
+    let mut scenes = Vec::new();
+    for (file, kind) in files {
+        let (mesh, _) = gridrt_scene::gltf_load::load_path(&dir.join(&file))?;
+        let tris = mesh.triangles();
+        if tris.is_empty() {
+            eprintln!("skipping {file}: no triangles");
+            continue;
+        }
+        scenes.push(LabScene { name: file, kind, bounds: mesh.bounds(), tris });
+    }
+    scenes.sort_by_key(|s| s.tris.len());
+    if quick {
+        scenes.truncate(2);
+    }
+    anyhow::ensure!(!scenes.is_empty(), "no scenes with triangles in {}", dir.display());
+    Ok(scenes)
+}
+
 /// The .glb/.gltf files directly in `dir`, sorted by path.
 pub fn gltf_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut files = Vec::new();

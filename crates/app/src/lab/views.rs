@@ -6,7 +6,7 @@
 use glam::Vec3;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{AnyGrid, GridConfig, Traversal, structure};
-use gridrt_scene::rays::{camera_rays, image_rays, random_rays};
+use gridrt_scene::rays::{image_rays, image_size, random_rays};
 use gridrt_scene::{Aabb, Camera, Hit, Ray};
 use serde::Serialize;
 
@@ -38,15 +38,26 @@ impl RaySet {
     }
 }
 
-/// The ray sets of `sc`, `count` rays each: framed, interior (architectural scenes only) and
-/// random. `probe` is a structure over `sc.tris` the framing traces its probe images with.
-pub fn ray_sets(sc: &LabScene, probe: &AnyGrid, count: usize) -> Vec<(RaySet, Vec<Ray>)> {
-    let framed = framed_camera(&sc.tris, &sc.bounds, probe, 4.0 / 3.0);
-    let mut sets = vec![(RaySet::Framed, camera_rays(&framed, count))];
+/// One ray set of a scene: its rays, and the width of their image when they are one (the camera
+/// sets, row-major, so packets can tile them).
+pub struct RayBatch {
+    pub set: RaySet,
+    pub rays: Vec<Ray>,
+    pub width: Option<usize>,
+}
+
+/// The ray sets of `sc`, about `count` rays each: framed and interior (architectural scenes only)
+/// as whole 4:3 images, and random rays. `probe` is a structure over `sc.tris` the framing
+/// traces its probe images with.
+pub fn ray_sets(sc: &LabScene, probe: &AnyGrid, count: usize) -> Vec<RayBatch> {
+    let (w, h) = image_size(count, 4.0 / 3.0);
+    let image = |set, cam: &Camera| RayBatch { set, rays: image_rays(cam, w, h), width: Some(w as usize) };
+    let framed = framed_camera(&sc.tris, &sc.bounds, probe, w as f32 / h as f32);
+    let mut sets = vec![image(RaySet::Framed, &framed)];
     if sc.kind.starts_with("architectural") {
-        sets.push((RaySet::Interior, camera_rays(&interior_camera(&sc.tris, &sc.bounds, probe), count)));
+        sets.push(image(RaySet::Interior, &interior_camera(&sc.tris, &sc.bounds, probe)));
     }
-    sets.push((RaySet::Random, random_rays(&sc.bounds, count, 7)));
+    sets.push(RayBatch { set: RaySet::Random, rays: random_rays(&sc.bounds, count, 7), width: None });
     sets
 }
 

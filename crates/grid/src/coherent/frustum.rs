@@ -64,6 +64,13 @@ impl Lane {
     }
 }
 
+/// `v.floor()` without the libm call of baseline x86-64 (|v| < 2^63; beyond, saturated).
+#[inline]
+fn floor(v: f64) -> f64 {
+    let i = v as i64 as f64;
+    if i > v { i - 1.0 } else { i }
+}
+
 /// Bounds over the active rays of their lines' intercepts and slopes on the two other axes.
 #[derive(Clone, Copy, Debug)]
 struct Bounds {
@@ -71,6 +78,33 @@ struct Bounds {
     c_hi: [f64; 2],
     slope_lo: [f64; 2],
     slope_hi: [f64; 2],
+}
+
+impl Bounds {
+    /// The bounds over the `active` lanes of their lines on the two axes other than `a`, with
+    /// intercepts at plane `s_ref`.
+    fn of(a: usize, s_ref: f64, lanes: &[Lane], active: &[u32]) -> Bounds {
+        let others = [(a + 1) % 3, (a + 2) % 3];
+        let mut b = Bounds {
+            c_lo: [f64::INFINITY; 2],
+            c_hi: [f64::NEG_INFINITY; 2],
+            slope_lo: [f64::INFINITY; 2],
+            slope_hi: [f64::NEG_INFINITY; 2],
+        };
+        for &i in active {
+            let l = &lanes[i as usize];
+            let ds = s_ref - l.o[a];
+            for (k, &u) in others.iter().enumerate() {
+                let slope = l.slope[k];
+                let c = l.o[u] + slope * ds;
+                b.c_lo[k] = b.c_lo[k].min(c);
+                b.c_hi[k] = b.c_hi[k].max(c);
+                b.slope_lo[k] = b.slope_lo[k].min(slope);
+                b.slope_hi[k] = b.slope_hi[k].max(slope);
+            }
+        }
+        b
+    }
 }
 
 /// The walk of one packet: axis, direction, steps and the frustum of its active rays.
@@ -129,7 +163,9 @@ impl SliceWalk {
                 return None;
             }
             let (e, x) = (l.o[axis] + l.d[axis] * l.t0 as f64, l.o[axis] + l.d[axis] * l.t1 as f64);
-            let slice = |v: f64| (v.floor().max(0.0) as u32).min(res - 1);
+            // Truncation is the floor of a non-negative value (and `f64::floor` is a libm call on
+            // baseline x86-64).
+            let slice = |v: f64| (v.max(0.0) as u32).min(res - 1);
             let step = |k: u32| if positive { k } else { res - 1 - k };
             let m = SLICE_MARGIN_CELLS;
             let (a, b) = if positive { (slice(e - m), slice(x + m)) } else { (slice(e + m), slice(x - m)) };
@@ -155,18 +191,20 @@ impl SliceWalk {
         // The reference plane: the first ray's origin or its end, whichever the rays are
         // closer together at.
         active.extend((0..lanes.len() as u32).filter(|&i| lanes[i as usize].ray.is_some()));
-        let mut best = (f64::INFINITY, 0.0);
-        for p in [ends.0, ends.1].into_iter().flatten() {
-            walk.s_ref = p[axis];
-            walk.update(lanes, active);
-            let b = &walk.bounds;
-            let spread = (b.c_hi[0] - b.c_lo[0]) + (b.c_hi[1] - b.c_lo[1]);
-            if spread < best.0 {
-                best = (spread, walk.s_ref);
+        let candidates = [ends.0, ends.1].map(|p| p.map(|p: [f64; 3]| p[axis]));
+        let bounds = candidates.map(|s| s.map(|s| (s, Bounds::of(axis, s, lanes, active))));
+        let spread = |b: &Bounds| (b.c_hi[0] - b.c_lo[0]) + (b.c_hi[1] - b.c_lo[1]);
+        (walk.s_ref, walk.bounds) = match bounds {
+            [Some(a), Some(b)] => {
+                if spread(&b.1) < spread(&a.1) {
+                    b
+                } else {
+                    a
+                }
             }
-        }
-        walk.s_ref = best.1;
-        walk.update(lanes, active);
+            [Some(a), None] | [None, Some(a)] => a,
+            [None, None] => (0.0, Bounds::of(axis, 0.0, lanes, active)),
+        };
         Some(walk)
     }
 
@@ -190,27 +228,7 @@ impl SliceWalk {
 
     /// Recomputes the frustum's bounds over the `active` lanes.
     pub fn update(&mut self, lanes: &[Lane], active: &[u32]) {
-        let a = self.axis;
-        let others = [(a + 1) % 3, (a + 2) % 3];
-        let mut b = Bounds {
-            c_lo: [f64::INFINITY; 2],
-            c_hi: [f64::NEG_INFINITY; 2],
-            slope_lo: [f64::INFINITY; 2],
-            slope_hi: [f64::NEG_INFINITY; 2],
-        };
-        for &i in active {
-            let l = &lanes[i as usize];
-            let ds = self.s_ref - l.o[a];
-            for (k, &u) in others.iter().enumerate() {
-                let slope = l.slope[k];
-                let c = l.o[u] + slope * ds;
-                b.c_lo[k] = b.c_lo[k].min(c);
-                b.c_hi[k] = b.c_hi[k].max(c);
-                b.slope_lo[k] = b.slope_lo[k].min(slope);
-                b.slope_hi[k] = b.slope_hi[k].max(slope);
-            }
-        }
-        self.bounds = b;
+        self.bounds = Bounds::of(self.axis, self.s_ref, lanes, active);
     }
 
     /// The walk's steps (empty when no ray is valid).
@@ -257,8 +275,9 @@ impl SliceWalk {
             if hi < 0.0 || lo >= r || lo.is_nan() || hi.is_nan() {
                 return None;
             }
-            l[u] = lo.floor().clamp(0.0, r - 1.0) as u32;
-            h[u] = hi.floor().clamp(0.0, r - 1.0) as u32;
+            // The floor, clamped to the grid (truncation of a non-negative value).
+            l[u] = (lo.max(0.0) as u32).min(res[u] - 1);
+            h[u] = (hi.max(0.0) as u32).min(res[u] - 1);
         }
         Some((l, h))
     }
@@ -272,7 +291,7 @@ impl SliceWalk {
         }
         let a = self.axis;
         let s = lane.o[a] + lane.d[a] * best_t as f64;
-        let k = s.floor() - 1.0;
+        let k = floor(s) - 1.0;
         let step = if self.positive { k } else { self.slices as f64 - 1.0 - (k + 2.0) };
         (step.max(0.0) as u32).min(lane.last)
     }

@@ -201,21 +201,21 @@ impl Packet {
             }
             self.cells_before.push(cells);
             let Some((lo, hi)) = walk.rect(j, res) else { continue };
-            let tests_before = tests;
             let n = (hi - lo + UVec3::ONE).as_u64vec3();
             cells += n.x * n.y * n.z;
             let (best, mb, rays_soa) = (&mut self.best, &mut self.mailbox, &self.rays);
+            let mut changed = false;
             grid.for_each_occupied(lo, hi, &mut |refs| {
                 for &tri in refs {
                     if mailbox && mb.check_and_insert(tri) {
                         continue;
                     }
                     tests += 1;
-                    rays_soa.test(&tris[tri as usize], tri, best);
+                    changed |= rays_soa.test(&tris[tri as usize], tri, best);
                 }
             });
-            // No ray can leave before `next_check` unless a triangle was tested (a new best).
-            if tests == tests_before && j < next_check {
+            // No ray can leave before `next_check` unless some ray's best hit changed.
+            if !changed && j < next_check {
                 continue;
             }
             let (best, cb, soa) = (&self.best, &self.cells_before, &mut self.rays);

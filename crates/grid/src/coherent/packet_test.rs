@@ -109,9 +109,10 @@ impl PacketRays {
     }
 
     /// Tests triangle `tri` (index `id`) against every gathered ray, keeping each lane's
-    /// closest hit in `best`.
+    /// closest hit in `best`; true when some lane's hit changed.
     #[inline]
-    pub fn test(&self, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) {
+    pub fn test(&self, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) -> bool {
+        let mut changed = false;
         let p: &[f32; 9] = bytemuck::cast_ref(tri);
         for g in &self.groups {
             let [kx, ky, kz] = g.perm;
@@ -143,10 +144,12 @@ impl PacketRays {
                         && closer(h.t, id, best[i].t, best[i].triangle)
                     {
                         best[i] = Hit { t: h.t, triangle: id, u: h.u, v: h.v };
+                        changed = true;
                     }
                 }
             }
         }
+        changed
     }
 }
 

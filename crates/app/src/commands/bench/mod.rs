@@ -18,15 +18,15 @@ pub mod targets;
 use glam::Vec3;
 use gridrt_gpu::GpuContext;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, Resolution, Traversal, structure};
+use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, PacketOptions, Resolution, Traversal, structure};
 use gridrt_scene::{Hit, Ray};
 use serde::Serialize;
 
 use crate::cli::BenchArgs;
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
-use crate::lab::scenes::{LabScene, default_scenes, gltf_files, procedural_scenes};
+use crate::lab::scenes::{LabScene, default_scenes, every_scene, procedural_scenes};
 use crate::lab::sweep::{best_of, machine, session};
-use crate::lab::views::{RaySet, hit_share, probe_grid, ray_sets};
+use crate::lab::views::{RayBatch, RaySet, hit_share, probe_grid, ray_sets};
 
 /// One structure on one scene and one ray set (its build and memory figures stand on each of its
 /// sets' rows).
@@ -37,7 +37,7 @@ pub struct Row {
     pub triangles: usize,
     /// A grid kind's name, or a peer configuration's.
     pub structure: String,
-    /// "grid" or "peer".
+    /// "grid" (single rays), "grid packets" (coherent packets, camera sets only) or "peer".
     pub family: &'static str,
     /// Best wall-clock build over the repetitions (auto resolution included for grids).
     pub build_ms: f64,
@@ -125,38 +125,10 @@ pub fn agree(a: &Hit, b: &Hit) -> bool {
 /// .glb/.gltf in the folder without a manifest, or the procedural stand-ins.
 fn pick_scenes(args: &BenchArgs) -> anyhow::Result<Vec<LabScene>> {
     let dir = if args.procedural { None } else { args.scenes.clone().or_else(default_scenes) };
-    let Some(dir) = dir else { return Ok(procedural_scenes(args.quick)) };
-    let manifest: Vec<serde_json::Value> = match std::fs::read_to_string(dir.join("manifest.json")) {
-        Ok(text) => serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}/manifest.json: {e}", dir.display()))?,
-        Err(_) => Vec::new(),
-    };
-    let mut files: Vec<(String, String)> = manifest
-        .iter()
-        .filter_map(|e| Some((e["file"].as_str()?.to_string(), e["kind"].as_str().unwrap_or("unknown").to_string())))
-        .collect();
-    if files.is_empty() {
-        let found = gltf_files(&dir).map_err(|e| anyhow::anyhow!("reading {}: {e}", dir.display()))?;
-        files.extend(
-            found.iter().filter_map(|p| Some((p.file_name()?.to_string_lossy().into_owned(), "unknown".into()))),
-        );
+    match dir {
+        Some(dir) => every_scene(&dir, args.quick),
+        None => Ok(procedural_scenes(args.quick)),
     }
-    files.sort();
-    let mut scenes = Vec::new();
-    for (file, kind) in files {
-        let (mesh, _) = gridrt_scene::gltf_load::load_path(&dir.join(&file))?;
-        let tris = mesh.triangles();
-        if tris.is_empty() {
-            eprintln!("bench: skipping {file}: no triangles");
-            continue;
-        }
-        scenes.push(LabScene { name: file, kind, bounds: mesh.bounds(), tris });
-    }
-    scenes.sort_by_key(|s| s.tris.len());
-    if args.quick {
-        scenes.truncate(2);
-    }
-    anyhow::ensure!(!scenes.is_empty(), "no scenes with triangles in {}", dir.display());
-    Ok(scenes)
 }
 
 /// A built subject, ready to trace.
@@ -198,10 +170,23 @@ impl Built {
     }
 }
 
-/// Measures every subject on one scene, on every ray set.
+/// One subject's measurements on a scene: a speed per ray set (`None` where it was not traced:
+/// packets on random rays) and the hits of the sets it traced.
+struct Measured {
+    structure: String,
+    family: &'static str,
+    subject: Subject,
+    build_s: f64,
+    memory: u64,
+    speeds: Vec<Option<(f64, Option<f64>)>>,
+    hits: Vec<Vec<Hit>>,
+}
+
+/// Measures every subject on one scene, on every ray set; the grids that walk packets also in
+/// `--tile` packets on the camera sets (a row of their own, family "grid packets").
 fn bench_scene(
     sc: &LabScene,
-    sets: &[(RaySet, Vec<Ray>)],
+    sets: &[RayBatch],
     args: &BenchArgs,
     cost: &CostModel,
     gpu: Option<&GpuContext>,
@@ -214,67 +199,111 @@ fn bench_scene(
         pb.set_message(format!("{} · {}", sc.name, subject.name()));
         let (build_s, built) = best_of(args.repeat as usize, || build(subject, &sc.tris, cost));
         let built = built?;
-        let mut speeds = Vec::new();
-        let mut hits = Vec::new();
-        for (_, rays) in sets {
-            let (s, h) = best_of(args.repeat as usize, || built.trace(&sc.tris, rays));
+        let memory = built.memory_bytes();
+        let mut single = Measured {
+            structure: subject.name(),
+            family: if matches!(subject, Subject::Grid(_)) { "grid" } else { "peer" },
+            subject,
+            build_s,
+            memory,
+            speeds: Vec::new(),
+            hits: Vec::new(),
+        };
+        for batch in sets {
+            let (s, h) = best_of(args.repeat as usize, || built.trace(&sc.tris, &batch.rays));
             let mut gpu_mrays = None;
             if let (Built::Grid(g, _), Some(gpu)) = (&built, gpu.as_ref()) {
                 let gs = gpu.upload(g)?;
+                let rays = &batch.rays;
                 // Untimed warm-up: pipeline creation and first upload.
                 gpu.trace(&gs, &rays[..rays.len().min(64)], Traversal::AmanatidesWoo, true)?;
                 let (s, r) = best_of(args.repeat as usize, || gpu.trace(&gs, rays, Traversal::AmanatidesWoo, true));
                 r?;
                 gpu_mrays = Some(rays.len() as f64 / s / 1e6);
             }
-            speeds.push((rays.len() as f64 / s / 1e6, gpu_mrays));
-            hits.push(h);
+            single.speeds.push(Some((batch.rays.len() as f64 / s / 1e6, gpu_mrays)));
+            single.hits.push(h);
         }
-        let reference = reference.get_or_insert_with(|| hits.clone());
-        let memory = built.memory_bytes();
-        for (i, (set, rays)) in sets.iter().enumerate() {
-            // Every disagreement is settled by brute force (the watertight test on every
-            // triangle): it says whether the flat grid or this structure is wrong.
-            let (mut mismatches, mut flat_wrong, mut blind_near) = (0u64, 0u64, 0u64);
-            for (k, (a, b)) in reference[i].iter().zip(&hits[i]).enumerate() {
-                if agree(a, b) {
+        let reference = reference.get_or_insert_with(|| single.hits.clone());
+        let mut measured = vec![single];
+        if let Built::Grid(g, _) = &built
+            && g.has_packets()
+        {
+            let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+            let packet_opts = PacketOptions { tile: args.tile, mailbox: true };
+            let mut packets = Measured {
+                structure: format!("{}, {t}×{t} packets", subject.name(), t = args.tile),
+                family: "grid packets",
+                subject,
+                build_s,
+                memory,
+                speeds: Vec::new(),
+                hits: Vec::new(),
+            };
+            for (i, batch) in sets.iter().enumerate() {
+                let Some(width) = batch.width else {
+                    packets.speeds.push(None);
+                    packets.hits.push(reference[i].clone());
                     continue;
-                }
-                mismatches += 1;
-                let (truth, _) = gridrt_grid::brute::trace(&sc.tris, &rays[k]);
-                flat_wrong += u64::from(!agree(&truth, a));
-                blind_near += u64::from(subject.blind_distance().is_some_and(|d| truth.t < d && b.t >= d));
-                if mismatches <= 3 {
-                    let (name, ray) = (subject.name(), rays[k]);
-                    log::warn!(
-                        "{} · {name}: {set:?} ray {k} {ray:?}: flat {a:?}, this {b:?}, brute force {truth:?}",
-                        sc.name
-                    );
-                }
+                };
+                let (s, (h, _, _)) = best_of(args.repeat as usize, || {
+                    g.trace_packets(&sc.tris, &batch.rays, width, opts, packet_opts, true)
+                });
+                packets.speeds.push(Some((batch.rays.len() as f64 / s / 1e6, None)));
+                packets.hits.push(h);
             }
-            rows.push(Row {
-                scene: sc.name.clone(),
-                kind: sc.kind.clone(),
-                triangles: sc.tris.len(),
-                structure: subject.name(),
-                family: if matches!(subject, Subject::Grid(_)) { "grid" } else { "peer" },
-                build_ms: build_s * 1e3,
-                memory_bytes: memory,
-                bytes_per_triangle: memory as f64 / sc.tris.len() as f64,
-                rays: *set,
-                hit_share: hit_share(&reference[i]),
-                mrays_s: speeds[i].0,
-                gpu_mrays_s: speeds[i].1,
-                parallel_build: subject.parallel_build(),
-                shared_triangle_test: subject.shared_test(),
-                mismatches,
-                flat_wrong,
-                blind_near,
-            });
+            measured.push(packets);
+        }
+        for m in measured {
+            for (i, batch) in sets.iter().enumerate() {
+                let Some((mrays_s, gpu_mrays_s)) = m.speeds[i] else { continue };
+                let (mismatches, flat_wrong, blind_near) = compare(sc, batch, &reference[i], &m.hits[i], m.subject);
+                rows.push(Row {
+                    scene: sc.name.clone(),
+                    kind: sc.kind.clone(),
+                    triangles: sc.tris.len(),
+                    structure: m.structure.clone(),
+                    family: m.family,
+                    build_ms: m.build_s * 1e3,
+                    memory_bytes: m.memory,
+                    bytes_per_triangle: m.memory as f64 / sc.tris.len() as f64,
+                    rays: batch.set,
+                    hit_share: hit_share(&reference[i]),
+                    mrays_s,
+                    gpu_mrays_s,
+                    parallel_build: subject.parallel_build(),
+                    shared_triangle_test: subject.shared_test(),
+                    mismatches,
+                    flat_wrong,
+                    blind_near,
+                });
+            }
         }
         pb.inc(1);
     }
     Ok(rows)
+}
+
+/// Every disagreement with the flat grid's hits (`reference`), settled by brute force (the
+/// watertight test on every triangle), which says whether the flat grid or the subject is wrong:
+/// (mismatches, of them where the flat grid is wrong, of them closer than the subject's blind
+/// distance).
+fn compare(sc: &LabScene, batch: &RayBatch, reference: &[Hit], hits: &[Hit], subject: Subject) -> (u64, u64, u64) {
+    let (mut mismatches, mut flat_wrong, mut blind_near) = (0u64, 0u64, 0u64);
+    for (k, (a, b)) in reference.iter().zip(hits).enumerate() {
+        if agree(a, b) {
+            continue;
+        }
+        mismatches += 1;
+        let (truth, _) = gridrt_grid::brute::trace(&sc.tris, &batch.rays[k]);
+        flat_wrong += u64::from(!agree(&truth, a));
+        blind_near += u64::from(subject.blind_distance().is_some_and(|d| truth.t < d && b.t >= d));
+        if mismatches <= 3 {
+            let (name, ray, set) = (subject.name(), batch.rays[k], batch.set);
+            log::warn!("{} · {name}: {set:?} ray {k} {ray:?}: flat {a:?}, this {b:?}, brute force {truth:?}", sc.name);
+        }
+    }
+    (mismatches, flat_wrong, blind_near)
 }
 
 /// One point of the auto-resolution check: the flat grid at a multiple of the auto m.
@@ -291,13 +320,8 @@ pub struct AutoPoint {
 
 /// Sweeps the flat grid's resolution from half to twice the auto choice (factors 2^(k/4)) and
 /// times both ray sets on the CPU.
-fn auto_check(
-    sc: &LabScene,
-    sets: &[(RaySet, Vec<Ray>)],
-    args: &BenchArgs,
-    cost: &CostModel,
-) -> anyhow::Result<Vec<AutoPoint>> {
-    let rays: Vec<Ray> = sets.iter().flat_map(|(_, r)| r.iter().copied()).collect();
+fn auto_check(sc: &LabScene, sets: &[RayBatch], args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<AutoPoint>> {
+    let rays: Vec<Ray> = sets.iter().flat_map(|b| b.rays.iter().copied()).collect();
     let cfg = GridConfig { cost: *cost, ..GridConfig::default() };
     // The resolution the flat build's auto policy picks, without building that grid.
     let bounds = gridrt_grid::triangle_bounds_with(&sc.tris, cfg.build.parallel);

@@ -1,7 +1,8 @@
 //! The targets, judged as ratios taken in one run on this machine (never as timed tests): the
 //! flat build against obvhs' fastest build on every scene of 50k triangles or more, linear
 //! build time, the best grid's memory against obvhs BVH2 medium, Mrays/s of the best grid
-//! against the best BVH on every ray set of every scene, the auto resolution against the sweep
+//! against the best BVH on every ray set of every scene (and the grids' coherent packets against
+//! it on the camera sets), the auto resolution against the sweep
 //! around it, and agreement of every structure's hits with the flat grid's.
 
 use serde::Serialize;
@@ -86,6 +87,26 @@ pub fn evaluate(rows: &[Row], auto: &[AutoPoint], scale: &[ScalePoint]) -> Vec<T
             }
             if let Some(e) = max_by(&embree, |r| r.mrays_s) {
                 push(&format!("best grid / best Embree Mrays/s, {}", set.name()), scene, g / e, "(reported)", true);
+            }
+            // Coherent packets (issue 19), on the camera sets: against the best BVH crate's
+            // single rays, and how much they gain over the best single-ray grid.
+            let packets: Vec<&Row> = rows.iter().filter(of_set).filter(|r| r.family == "grid packets").collect();
+            if let Some(k) = max_by(&packets, |r| r.mrays_s) {
+                if let Some(p) = max_by(&peers, |r| r.mrays_s) {
+                    let target = format!("best grid packets / best BVH Mrays/s, {}", set.name());
+                    push(&target, scene, k / p, "≥ 1.5", k / p >= 1.5);
+                }
+                let target = format!("best grid packets / best grid single rays, {}", set.name());
+                push(&target, scene, k / g, "(reported)", true);
+                if let Some(e) = max_by(&embree, |r| r.mrays_s) {
+                    push(
+                        &format!("best grid packets / best Embree Mrays/s, {}", set.name()),
+                        scene,
+                        k / e,
+                        "(reported)",
+                        true,
+                    );
+                }
             }
         }
     }

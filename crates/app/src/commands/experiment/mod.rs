@@ -3,6 +3,7 @@
 //! Benchmarks print numbers; nothing here asserts a speed.
 
 pub mod bresenham;
+pub mod cgt;
 pub mod cost_constants;
 pub mod fig5;
 pub mod hierarchy;
@@ -18,5 +19,6 @@ pub fn run(args: ExperimentArgs) -> anyhow::Result<()> {
         ExperimentName::Models => models::run(&args),
         ExperimentName::Hierarchy => hierarchy::run(&args),
         ExperimentName::CostConstants => cost_constants::run(&args),
+        ExperimentName::Cgt => cgt::run(&args),
     }
 }
