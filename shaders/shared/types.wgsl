@@ -52,6 +52,7 @@ struct Params {
     macro_edge: u32,
     // Index of this dispatch's first ray in the whole ray set.
     first_ray: u32,
-    pad: u32,
+    // Pixels per row of the image the rays form (the packet kernels).
+    image_width: u32,
 }
 

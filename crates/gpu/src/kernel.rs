@@ -19,6 +19,10 @@ pub enum Kernel {
 impl Kernel {
     /// Every trace kernel's entry point.
     pub const ENTRY: &'static str = "trace";
+    /// Every packet kernel's entry point (`shaders/shared/coherent.wgsl`).
+    pub const PACKET_ENTRY: &'static str = "trace_packets";
+    /// Rays per packet edge of the packet kernels (`PACKET_EDGE`: 8×8 workgroups).
+    pub const PACKET_EDGE: u32 = 8;
     /// The kernel that traces a structure of `kind`.
     pub fn for_kind(kind: GridKind) -> Kernel {
         match kind {
@@ -26,6 +30,16 @@ impl Kernel {
             GridKind::Macrocell => Kernel::Macrocell,
             GridKind::Multires | GridKind::TwoLevel => Kernel::Hierarchy,
             GridKind::Proximity => Kernel::Proximity,
+        }
+    }
+
+    /// The packet kernel's file under `shaders/` (coherent grid traversal of an image's rays in
+    /// 8×8 tiles), for the structures that have one.
+    pub fn packet_file(self) -> Option<&'static str> {
+        match self {
+            Kernel::Flat => Some("coherent_flat.wgsl"),
+            Kernel::Macrocell => Some("coherent_macrocell.wgsl"),
+            Kernel::Hierarchy | Kernel::Proximity => None,
         }
     }
 

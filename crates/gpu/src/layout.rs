@@ -43,7 +43,8 @@ pub struct GridParams {
     pub macro_edge: u32,
     /// Index of this dispatch's first ray in the whole ray set.
     pub first_ray: u32,
-    pub pad: u32,
+    /// Pixels per row of the image the rays form (the packet kernels; 0 for other rays).
+    pub image_width: u32,
 }
 
 /// One grid of a hierarchy: xyz = resolution, w = first cell. WGSL `Node`.

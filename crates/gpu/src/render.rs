@@ -41,6 +41,9 @@ pub struct RenderOptions {
     pub mailbox: bool,
     /// Count shown as the top of the heatmap scale.
     pub heat_max: f32,
+    /// Primary and shadow rays in 8×8 coherent packets (the flat and macrocell grids' packet
+    /// kernels; other structures trace single rays).
+    pub packets: bool,
 }
 
 impl RenderOptions {
@@ -55,6 +58,7 @@ impl RenderOptions {
             traversal: Traversal::AmanatidesWoo,
             mailbox: true,
             heat_max: 64.0,
+            packets: false,
         }
     }
 
@@ -299,7 +303,9 @@ impl Renderer {
         q.write_buffer(&t.camera, 0, bytemuck::bytes_of(&cam));
         let sp = ShadeParams { first_pixel: first, pixel_count: count, ..shade_params(bounds, o) };
         q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&sp));
-        let tp = GridParams { ray_count: count, mailbox: o.mailbox as u32, first_ray: first, ..s.params };
+        let image = o.packets.then_some(crate::trace::ImageRays { width: o.width, first });
+        let image_width = if o.packets { o.width } else { 0 };
+        let tp = GridParams { ray_count: count, mailbox: o.mailbox as u32, first_ray: first, image_width, ..s.params };
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
 
         let groups = count.div_ceil(WORKGROUP);
@@ -330,7 +336,8 @@ impl Renderer {
         run(enc, &self.camera, &camera_bg, "camera rays");
         let trace = |enc: &mut wgpu::CommandEncoder, rays, hits, stats| {
             let params = &t.trace_params;
-            self.tracer.encode(ctx, enc, &TraceJob { scene, structure: s, params, rays, hits, stats, count, walker })
+            let job = TraceJob { scene, structure: s, params, rays, hits, stats, count, walker, image };
+            self.tracer.encode(ctx, enc, &job)
         };
         trace(enc, &t.rays, &t.hits, &t.stats)?;
         if o.view == View::Shaded {

@@ -53,6 +53,19 @@ impl<'a> GpuSession<'a> {
         self.tracer.trace(self.ctx, &self.scene, s, rays, traversal, mailbox)
     }
 
+    /// [`GpuSession::trace`] for the rays of a row-major image `width` pixels wide, in 8×8
+    /// packets where the structure has a packet kernel (see [`Tracer::trace_image`]).
+    pub fn trace_image(
+        &self,
+        s: &GpuStructure,
+        rays: &[Ray],
+        width: u32,
+        traversal: Traversal,
+        mailbox: bool,
+    ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
+        self.tracer.trace_image(self.ctx, &self.scene, s, rays, width, traversal, mailbox)
+    }
+
     /// Renders one image through `s` and reads it back (see [`Renderer::render`]).
     pub fn render(&self, s: &GpuStructure, opts: &RenderOptions) -> Result<Frame, GpuError> {
         self.renderer()?.render(self.ctx, &self.source(s), opts)

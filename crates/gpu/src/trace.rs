@@ -56,7 +56,7 @@ pub(crate) fn pipeline_walking(
 /// kept between calls.
 #[derive(Debug, Default)]
 pub struct Tracer {
-    pipelines: Mutex<HashMap<(Kernel, GpuWalker), wgpu::ComputePipeline>>,
+    pipelines: Mutex<HashMap<(Kernel, GpuWalker, bool), wgpu::ComputePipeline>>,
     scratch: Mutex<Option<Scratch>>,
 }
 
@@ -118,6 +118,17 @@ pub struct TraceJob<'a> {
     pub stats: &'a wgpu::Buffer,
     pub count: u32,
     pub walker: GpuWalker,
+    /// The rays are pixels `first .. first + count` of a row-major image this many pixels wide:
+    /// traced in 8×8 packets where the structure has a packet kernel. `params` must hold the
+    /// same `first_ray` and `image_width`.
+    pub image: Option<ImageRays>,
+}
+
+/// Where a dispatch's rays lie in an image (see [`TraceJob::image`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageRays {
+    pub width: u32,
+    pub first: u32,
 }
 
 impl Tracer {
@@ -125,21 +136,32 @@ impl Tracer {
         Tracer::default()
     }
 
-    /// The pipeline of `kernel` composed with `walker`.
-    fn pipeline(&self, ctx: &GpuContext, kernel: Kernel, walker: GpuWalker) -> Result<wgpu::ComputePipeline, GpuError> {
+    /// The pipeline of `kernel` composed with `walker`: its packet kernel when `packets`.
+    fn pipeline(
+        &self,
+        ctx: &GpuContext,
+        kernel: Kernel,
+        walker: GpuWalker,
+        packets: bool,
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
         let mut map = self.pipelines.lock().expect("tracer lock");
-        if let Some(p) = map.get(&(kernel, walker)) {
+        if let Some(p) = map.get(&(kernel, walker, packets)) {
             return Ok(p.clone());
         }
-        let p = pipeline_walking(ctx, kernel.file(), Kernel::ENTRY, walker)?;
-        map.insert((kernel, walker), p.clone());
+        let p = match kernel.packet_file().filter(|_| packets) {
+            Some(file) => pipeline_walking(ctx, file, Kernel::PACKET_ENTRY, walker)?,
+            None => pipeline_walking(ctx, kernel.file(), Kernel::ENTRY, walker)?,
+        };
+        map.insert((kernel, walker, packets), p.clone());
         Ok(p)
     }
 
     /// Records one trace dispatch into `enc`.
     pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, b: &TraceJob) -> Result<(), GpuError> {
         let (scene, s) = (b.scene, b.structure);
-        let pipe = self.pipeline(ctx, Kernel::for_kind(s.kind), b.walker)?;
+        let kernel = Kernel::for_kind(s.kind);
+        let image = b.image.filter(|_| kernel.packet_file().is_some());
+        let pipe = self.pipeline(ctx, kernel, b.walker, image.is_some())?;
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: b.params.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: records(b.rays, b.count, RAY_BYTES) },
@@ -161,7 +183,15 @@ impl Tracer {
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("trace pass"), timestamp_writes: None });
         pass.set_pipeline(&pipe);
         pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(b.count.div_ceil(WORKGROUP), 1, 1);
+        match image {
+            // One workgroup per 8×8 tile of the rows the rays span.
+            Some(ImageRays { width, first }) => {
+                let rows = (first + b.count.max(1) - 1) / width - first / width + 1;
+                let edge = Kernel::PACKET_EDGE;
+                pass.dispatch_workgroups(width.div_ceil(edge), rows.div_ceil(edge), 1);
+            }
+            None => pass.dispatch_workgroups(b.count.div_ceil(WORKGROUP), 1, 1),
+        }
         Ok(())
     }
 
@@ -175,10 +205,44 @@ impl Tracer {
         traversal: Traversal,
         mailbox: bool,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
+        self.trace_rays(ctx, scene, s, rays, None, (traversal, mailbox))
+    }
+
+    /// [`Tracer::trace`] for the rays of a row-major image `width` pixels wide: in 8×8 packets
+    /// where the structure has a packet kernel (flat, macrocell), else one ray per invocation.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_image(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        s: &GpuStructure,
+        rays: &[Ray],
+        width: u32,
+        traversal: Traversal,
+        mailbox: bool,
+    ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
+        self.trace_rays(ctx, scene, s, rays, Some(width.max(1)), (traversal, mailbox))
+    }
+
+    fn trace_rays(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        s: &GpuStructure,
+        rays: &[Ray],
+        width: Option<u32>,
+        (traversal, mailbox): (Traversal, bool),
+    ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
         let limits = ctx.device.limits();
         let max_by_binding = limits.max_storage_buffer_binding_size / std::mem::size_of::<GpuRay>() as u64;
         let max_by_dispatch = limits.max_compute_workgroups_per_dimension as u64 * WORKGROUP as u64;
-        let chunk = (1u64 << 20).min(max_by_binding).min(max_by_dispatch).max(1) as usize;
+        let mut chunk = (1u64 << 20).min(max_by_binding).min(max_by_dispatch).max(1) as usize;
+        if let Some(w) = width {
+            // Whole packet bands per chunk, within the dispatch limit on both axes.
+            let band = w as usize * Kernel::PACKET_EDGE as usize;
+            let by_rows = limits.max_compute_workgroups_per_dimension as usize * band;
+            chunk = (chunk.min(by_rows) / band).max(1) * band;
+        }
         let walker = walker_for(traversal)?;
         let n = chunk.min(rays.len().max(1));
         let mut scratch = self.scratch.lock().expect("tracer scratch lock");
@@ -186,7 +250,7 @@ impl Tracer {
             *scratch = Some(Scratch::new(ctx, n));
         }
         let b = scratch.as_ref().expect("scratch buffers were just made");
-        let out = self.trace_chunks(ctx, scene, s, rays, chunk, (walker, mailbox), b);
+        let out = self.trace_chunks(ctx, scene, s, rays, (chunk, width), (walker, mailbox), b);
         if out.is_err() {
             // A failed readback may leave a buffer mapped: the next call starts afresh.
             *scratch = None;
@@ -202,7 +266,7 @@ impl Tracer {
         scene: &GpuScene,
         s: &GpuStructure,
         rays: &[Ray],
-        chunk: usize,
+        (chunk, width): (usize, Option<u32>),
         (walker, mailbox): (GpuWalker, bool),
         b: &Scratch,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
@@ -210,13 +274,16 @@ impl Tracer {
         let mut all_stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
             let count = part.len() as u32;
-            let p =
-                GridParams { ray_count: count, mailbox: mailbox as u32, first_ray: (ci * chunk) as u32, ..s.params };
+            let first = (ci * chunk) as u32;
+            let image_width = width.unwrap_or(0);
+            let p = GridParams { ray_count: count, mailbox: mailbox as u32, first_ray: first, image_width, ..s.params };
+            let image = width.map(|width| ImageRays { width, first });
             ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
             ctx.queue.write_buffer(&b.rays, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
             let (params, rays, hits, stats) = (&b.params, &b.rays, &b.hits, &b.stats);
-            self.encode(ctx, &mut enc, &TraceJob { scene, structure: s, params, rays, hits, stats, count, walker })?;
+            let job = TraceJob { scene, structure: s, params, rays, hits, stats, count, walker, image };
+            self.encode(ctx, &mut enc, &job)?;
             let (hit_bytes, stat_bytes) = (count as u64 * HIT_BYTES, count as u64 * STATS_BYTES);
             enc.copy_buffer_to_buffer(&b.hits, 0, &b.hits_read, 0, hit_bytes);
             enc.copy_buffer_to_buffer(&b.stats, 0, &b.stats_read, 0, stat_bytes);

@@ -1,6 +1,6 @@
 //! `gridrt bench-trace SCENE`: Mrays/s of the CPU reference (all threads) and the GPU trace
 //! pass on the same camera (auto and framed views) and random rays, in one run, and of the CPU's
-//! coherent packets on the camera rays. Prints; asserts nothing.
+//! and the GPU's coherent packets on the camera rays. Prints; asserts nothing.
 
 use std::time::Instant;
 
@@ -71,6 +71,15 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
                 err = Some(e);
             }
         });
+        // The GPU's 8×8 packet kernels, where the kind has one.
+        let gpu_packets = *is_image && gridrt_gpu::Kernel::for_kind(grid.kind()).packet_file().is_some();
+        let gpu_packet_s = gpu_packets.then(|| {
+            best(&mut || {
+                if let Err(e) = gpu.trace_image(&gs, rays, width, args.traversal, true) {
+                    err = Some(e);
+                }
+            })
+        });
         if let Some(e) = err {
             return Err(e.into());
         }
@@ -78,7 +87,8 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         rows.push(
             json!({"rays": name, "count": rays.len(), "hit_share": hits as f64 / n, "cpu_mrays_s": n / cpu_s / 1e6,
             "cpu_packets_mrays_s": packet_s.map(|s| n / s / 1e6), "packets_over_single": packet_s.map(|s| cpu_s / s),
-            "gpu_mrays_s": n / gpu_s / 1e6, "gpu_over_cpu": cpu_s / gpu_s}),
+            "gpu_mrays_s": n / gpu_s / 1e6, "gpu_over_cpu": cpu_s / gpu_s,
+            "gpu_packets_mrays_s": gpu_packet_s.map(|s| n / s / 1e6), "gpu_packets_over_single": gpu_packet_s.map(|s| gpu_s / s)}),
         );
     }
     if args.json {
@@ -100,7 +110,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     );
     let tile = args.tile;
     println!(
-        "{:<8} {:>10} {:>6} {:>12} {:>16} {:>9} {:>12} {:>8}",
+        "{:<8} {:>10} {:>6} {:>12} {:>16} {:>9} {:>12} {:>8} {:>12} {:>9}",
         "rays",
         "count",
         "hits",
@@ -108,12 +118,14 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         format!("{tile}x{tile} packets"),
         "speed-up",
         "GPU Mrays/s",
-        "GPU/CPU"
+        "GPU/CPU",
+        "GPU packets",
+        "speed-up"
     );
     let num = |v: &serde_json::Value, digits: usize| v.as_f64().map_or("-".to_string(), |x| format!("{x:.digits$}"));
     for r in &rows {
         println!(
-            "{:<8} {:>10} {:>5.0}% {:>12} {:>16} {:>9} {:>12} {:>8}",
+            "{:<8} {:>10} {:>5.0}% {:>12} {:>16} {:>9} {:>12} {:>8} {:>12} {:>9}",
             r["rays"].as_str().unwrap_or(""),
             r["count"],
             r["hit_share"].as_f64().unwrap_or(0.0) * 100.0,
@@ -121,7 +133,9 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
             num(&r["cpu_packets_mrays_s"], 2),
             num(&r["packets_over_single"], 2),
             num(&r["gpu_mrays_s"], 2),
-            num(&r["gpu_over_cpu"], 2)
+            num(&r["gpu_over_cpu"], 2),
+            num(&r["gpu_packets_mrays_s"], 2),
+            num(&r["gpu_packets_over_single"], 2)
         );
     }
     if ctx.info.device_type == wgpu::DeviceType::Cpu {

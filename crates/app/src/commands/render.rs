@@ -56,11 +56,18 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         traversal: args.traversal,
         mailbox: !args.no_mailbox,
         heat_max: args.heat_max,
+        packets: args.packets == Switch::On,
     };
     let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&camera, width, height));
     let packets_on = args.packets == Switch::On;
     let (frame, adapter) = match args.backend {
         Device::Gpu => {
+            anyhow::ensure!(
+                !packets_on || args.tile == gridrt_gpu::Kernel::PACKET_EDGE,
+                "the GPU's packet kernels trace {0}x{0} packets: --tile {1} needs --backend cpu",
+                gridrt_gpu::Kernel::PACKET_EDGE,
+                args.tile
+            );
             let ctx = super::gpu_context()?;
             let gpu = GpuSession::new(&ctx, &tris, bounds)?;
             let gs = gpu.upload(&grid)?;
@@ -77,7 +84,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 hits: frame.hits,
                 primary_ms: ms,
                 shadow_ms: None,
-                packets: PacketStats::default(),
+                // On the GPU every 8×8 tile of each pass is one packet workgroup (an incoherent
+                // one traces its rays singly; the kernel does not count them apart).
+                packets: PacketStats { packets: gpu_packets(&grid, &opts), single_ray_packets: 0 },
             };
             (rendered, Some(ctx.adapter_name()))
         }
@@ -125,7 +134,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         args.view.name()
     );
     let packets = match (args.backend, frame.packets.packets + frame.packets.single_ray_packets) {
-        (Device::Gpu, _) if packets_on => "; packets: none (the GPU kernels trace single rays)".to_string(),
+        (Device::Gpu, 0) if packets_on => {
+            format!("; packets: none (the {} grid's kernel traces single rays)", grid.kind())
+        }
+        (Device::Gpu, 0) => String::new(),
+        (Device::Gpu, n) => format!("; 8x8 packets: {n} workgroups (incoherent ones trace single rays)"),
         (_, 0) if packets_on => format!("; packets: none (the {} grid traces single rays)", grid.kind()),
         (_, 0) => String::new(),
         (_, _) => format!(
@@ -165,6 +178,18 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     println!("wrote {}", args.output.display());
     Ok(())
+}
+
+/// The packet workgroups of a GPU frame: an 8×8 tile per pass (primary, and shadow for the shaded
+/// view) where the structure has a packet kernel.
+fn gpu_packets(grid: &AnyGrid, o: &RenderOptions) -> u64 {
+    let kernel = gridrt_gpu::Kernel::for_kind(grid.kind());
+    if !o.packets || kernel.packet_file().is_none() {
+        return 0;
+    }
+    let edge = gridrt_gpu::Kernel::PACKET_EDGE;
+    let passes = if o.view == gridrt_gpu::View::Shaded { 2 } else { 1 };
+    o.width.div_ceil(edge) as u64 * o.height.div_ceil(edge) as u64 * passes
 }
 
 /// The frame on the CPU: primary rays, shadow rays from their hits, shading (the CPU ports of

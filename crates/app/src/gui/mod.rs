@@ -53,6 +53,7 @@ struct RenderKey {
     view: View,
     traversal: gridrt_grid::Traversal,
     mailbox: bool,
+    packets: bool,
     heat_max: f32,
     size: [u32; 2],
     structure: u64,
@@ -243,6 +244,7 @@ impl GridrtApp {
             traversal: self.settings.traversal,
             mailbox: self.settings.mailbox,
             heat_max: self.settings.heat_max,
+            packets: self.settings.packets,
         }
     }
 
@@ -305,6 +307,7 @@ impl GridrtApp {
             view: self.settings.view,
             traversal: self.settings.traversal,
             mailbox: self.settings.mailbox,
+            packets: self.settings.packets,
             heat_max: self.settings.heat_max,
             size,
             structure: b.id,

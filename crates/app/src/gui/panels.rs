@@ -202,6 +202,8 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
     });
     ui.small("Naive Bresenham misses cells: see the traversal explainer.");
     ui.checkbox(&mut s.mailbox, "mailboxing");
+    ui.checkbox(&mut s.packets, "coherent packets (8×8)")
+        .on_hover_text("Primary and shadow rays traced in 8×8 packets that walk the grid slice by slice (flat and macrocell grids; the others trace single rays)");
 
     ui.separator();
     ui.heading("View");

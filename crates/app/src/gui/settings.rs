@@ -16,6 +16,8 @@ pub struct Settings {
     pub grid: GridConfig,
     pub traversal: Traversal,
     pub mailbox: bool,
+    /// Primary and shadow rays in 8×8 coherent packets (flat and macrocell grids).
+    pub packets: bool,
     /// What the image shows (stored by name, e.g. "heatmap-cells").
     pub view: View,
     /// Count at the top of the heatmap colour scale.
@@ -36,6 +38,7 @@ impl Default for Settings {
             grid: GridConfig::default(),
             traversal: Traversal::AmanatidesWoo,
             mailbox: true,
+            packets: true,
             view: View::Shaded,
             heat_max: 64.0,
             render_scale: 0.5,

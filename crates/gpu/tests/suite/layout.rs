@@ -32,7 +32,12 @@ fn rust_and_wgsl_structs_have_the_same_layout() {
     check!(trace, "Ray", GpuRay, [origin_tmin, dir_tmax]);
     check!(trace, "Hit", gridrt_scene::Hit, [t, triangle, u, v]);
     check!(trace, "RayStats", gridrt_grid::RayStats, [cells, tests]);
-    check!(trace, "Params", GridParams, [grid_min, inv_cell, res, ray_count, mailbox, macro_edge, first_ray, pad]);
+    check!(
+        trace,
+        "Params",
+        GridParams,
+        [grid_min, inv_cell, res, ray_count, mailbox, macro_edge, first_ray, image_width]
+    );
     check!(trace, "Node", GpuNode, [res_first]);
     let render = naga::front::wgsl::parse_str(&compose("shade.wgsl").unwrap()).unwrap();
     check!(render, "Camera", GpuCamera, [eye, tan_half_vfov, right, width, up, height, forward, aspect]);

@@ -3,5 +3,6 @@ pub mod build;
 pub mod common;
 pub mod layout;
 pub mod naga_validate;
+pub mod packets;
 pub mod render;
 pub mod trace;
