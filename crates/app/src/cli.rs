@@ -54,6 +54,9 @@ pub struct AppArgs {
     /// Traversal to start with: aw, cw or liu.
     #[arg(long, value_parser = parse_traversal)]
     pub traversal: Option<Traversal>,
+    /// Coherent 8×8 packets for primary and shadow rays (flat and macrocell grids), on or off.
+    #[arg(long, value_enum)]
+    pub packets: Option<Switch>,
     /// Camera to start with: eye_x,eye_y,eye_z,target_x,target_y,target_z,fov (default: frame the scene).
     #[arg(long, value_parser = parse_camera)]
     pub camera: Option<gridrt_scene::Camera>,

@@ -559,13 +559,13 @@ fn app_screenshots_under_xvfb() {
     let scene = tmp("app-teapot.glb");
     ok(&["gen", "teapot-in-stadium", "--size", "1", "-o", s(&scene)]);
     let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
-    let shot = |grid: &str, view: &str| -> image::RgbaImage {
-        let png = out_dir.join(format!("app-{grid}-{view}.png"));
+    let shot = |grid: &str, view: &str, packets: &str| -> image::RgbaImage {
+        let png = out_dir.join(format!("app-{grid}-{view}-packets-{packets}.png"));
         let _ = std::fs::remove_file(&png);
         let out = gridrt_cmd()
             // Inside the stadium, close to the knot: the walls are far behind it.
             .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--grid", grid, "--view", view])
-            .args(["--camera", "0.25,0.18,0.35,0,0,0,50", "--render-scale", "0.5"])
+            .args(["--camera", "0.25,0.18,0.35,0,0,0,50", "--render-scale", "0.5", "--packets", packets])
             .env("DISPLAY", &x.display)
             .env_remove("WAYLAND_DISPLAY")
             .output()
@@ -577,7 +577,7 @@ fn app_screenshots_under_xvfb() {
         image::open(&png).expect("reading the screenshot").to_rgba8()
     };
     for grid in ["flat", "macrocell", "multires", "twolevel", "proximity"] {
-        let img = shot(grid, "shaded");
+        let img = shot(grid, "shaded", "off");
         assert!(img.width() >= 640 && img.height() >= 400, "{grid}: {}x{}", img.width(), img.height());
         let px = centre_pixels(&img);
         let mut colours = px.clone();
@@ -588,11 +588,16 @@ fn app_screenshots_under_xvfb() {
         let bright = px.iter().filter(|p| p.iter().map(|&c| c as u32).sum::<u32>() > 200).count();
         assert!(bright * 10 > px.len(), "{grid}: only {bright} of {} centre pixels are lit", px.len());
     }
-    let flat = centre_pixels(&shot("flat", "heatmap-cells"));
-    let macrocell = centre_pixels(&shot("macrocell", "heatmap-cells"));
+    let flat = centre_pixels(&shot("flat", "heatmap-cells", "off"));
+    let macrocell = centre_pixels(&shot("macrocell", "heatmap-cells", "off"));
     let differ = flat.iter().zip(&macrocell).filter(|(a, b)| a != b).count();
     println!("heatmap-cells: {differ} of {} centre pixels differ between flat and macrocell", flat.len());
     assert!(differ * 20 > flat.len(), "flat and macrocell heatmaps should differ: {differ} of {}", flat.len());
+
+    // Coherent packets (the packet kernels): the same shaded image.
+    let (single, packets) =
+        (centre_pixels(&shot("flat", "shaded", "off")), centre_pixels(&shot("flat", "shaded", "on")));
+    assert_eq!(single, packets, "the app's flat frame in packets differs from single rays");
 
     // A 3840×2160 frame (more pixels than one storage binding holds): rendered in tiles.
     let png = out_dir.join("app-3840x2160.png");

@@ -7,6 +7,7 @@
 //! 2. for the flat and macrocell grids renders the shaded view at a fixed camera and size,
 //!    reads the frame back and compares it with `gridrt render` (native, lavapipe) for the same
 //!    scene, camera and size: same hit/miss on ≥ 99 % of pixels and a small mean colour error;
+//!    Then the same frame with coherent packets (the packet kernels) must be identical;
 //! 3. switches the view to a heatmap (the frame must change) and the traversal to Liu;
 //! 4. opens a generated .glb through the same path a dropped or picked file takes, and a
 //!    corrupt one, which must show an error without losing the page.
@@ -267,7 +268,28 @@ fn drive(
             mean_diff <= MAX_MEAN_DIFF,
             "the browser's {grid} frame differs from gridrt render by {mean_diff:.2}/255 on average (limit {MAX_MEAN_DIFF})"
         );
-        rows.push(json!({"grid": grid, "agreement": agree, "mean_colour_diff": mean_diff, "hit_share": hit_share, "stats": s}));
+        // The packet kernels: the same pixels as the single-ray kernels.
+        let before = page.eval("window.gridrt.stats().frames")?.as_u64().unwrap_or(0);
+        page.eval("window.gridrt.set_packets('on'); true")?;
+        let p = wait_idle(
+            page,
+            &format!("a {grid} frame in packets"),
+            &format!("s.packets && s.frames > {before}"),
+            timeout,
+        )?;
+        let (_, _, packed) = read_frame(page, timeout)?;
+        let differ = packed.chunks_exact(4).zip(rgba.chunks_exact(4)).filter(|(a, b)| a != b).count();
+        println!(
+            "web-test: {grid:9} in 8x8 packets: {differ} pixels differ, {:.1} ms/frame",
+            p["frame_ms"].as_f64().unwrap_or(f64::NAN)
+        );
+        ensure!(differ == 0, "the browser's {grid} frame in packets differs from single rays on {differ} pixels");
+        page.eval("window.gridrt.set_packets('off'); true")?;
+        wait_idle(page, "packets off", "!s.packets", timeout)?;
+        rows.push(
+            json!({"grid": grid, "agreement": agree, "mean_colour_diff": mean_diff, "hit_share": hit_share, "stats": s,
+                         "packet_pixels_differing": differ, "packet_frame_ms": p["frame_ms"]}),
+        );
     }
     let macro_shaded = read_frame(page, timeout)?.2;
 

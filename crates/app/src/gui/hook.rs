@@ -25,6 +25,8 @@ pub struct HookStats {
     /// Kind of the structure on screen (not the one being built).
     pub grid: String,
     pub traversal: String,
+    /// Primary and shadow rays in coherent packets (the setting).
+    pub packets: bool,
     pub view: String,
     /// Name of the scene on screen.
     pub scene: String,
@@ -74,6 +76,14 @@ pub struct AnimationStats {
     pub trace_ms: f64,
 }
 
+fn on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" | "true" => Ok(true),
+        "off" | "false" => Ok(false),
+        _ => Err(format!("{s:?}: expected on or off")),
+    }
+}
+
 /// A command from the page.
 #[derive(Clone, Debug, PartialEq)]
 pub enum HookCommand {
@@ -98,6 +108,8 @@ pub enum HookCommand {
     Seek(f64),
     /// Build flat and macrocell grids on the GPU (or not).
     GpuBuild(bool),
+    /// Trace primary and shadow rays in coherent packets (or not).
+    Packets(bool),
 }
 
 impl HookCommand {
@@ -122,11 +134,10 @@ impl HookCommand {
         }
     }
     pub fn gpu_build(s: &str) -> Result<HookCommand, String> {
-        match s {
-            "on" | "true" => Ok(HookCommand::GpuBuild(true)),
-            "off" | "false" => Ok(HookCommand::GpuBuild(false)),
-            _ => Err(format!("{s:?}: expected on or off")),
-        }
+        on_off(s).map(HookCommand::GpuBuild)
+    }
+    pub fn packets(s: &str) -> Result<HookCommand, String> {
+        on_off(s).map(HookCommand::Packets)
     }
     pub fn seek(s: &str) -> Result<HookCommand, String> {
         match s.trim().parse::<f64>() {
@@ -210,6 +221,8 @@ mod tests {
         assert!(HookCommand::seek("NaN").is_err());
         assert_eq!(HookCommand::gpu_build("on"), Ok(HookCommand::GpuBuild(true)));
         assert!(HookCommand::gpu_build("maybe").is_err());
+        assert_eq!(HookCommand::packets("off"), Ok(HookCommand::Packets(false)));
+        assert!(HookCommand::packets("8").is_err());
     }
 
     #[test]

@@ -159,6 +159,9 @@ impl GridrtApp {
         if let Some(t) = args.traversal {
             settings.traversal = t;
         }
+        if let Some(p) = args.packets {
+            settings.packets = p == crate::cli::Switch::On;
+        }
         if smoke.is_some() {
             settings.render_scale = 1.0;
         }

@@ -38,7 +38,9 @@ impl Default for Settings {
             grid: GridConfig::default(),
             traversal: Traversal::AmanatidesWoo,
             mailbox: true,
-            packets: true,
+            // Off: on the software adapter the packet kernels are slower than single rays
+            // (README, "Coherent grid traversal").
+            packets: false,
             view: View::Shaded,
             heat_max: 64.0,
             render_scale: 0.5,

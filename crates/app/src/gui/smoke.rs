@@ -136,6 +136,7 @@ impl GridrtApp {
                     }
                 }
                 HookCommand::GpuBuild(on) => self.settings.gpu_build = on,
+                HookCommand::Packets(on) => self.settings.packets = on,
                 HookCommand::Seek(seconds) => {
                     if let (Some(t), Some(s)) = (&mut self.timeline, &self.scene) {
                         t.seek(&s.loaded.clips[t.clip], seconds);
@@ -213,6 +214,7 @@ impl GridrtApp {
             adapter: self.gpu.as_ref().map_or_else(String::new, |g| g.ctx.adapter_name()),
             grid: built.map_or_else(String::new, |b| b.config.kind.to_string()),
             traversal: self.settings.traversal.short_name().into(),
+            packets: self.settings.packets,
             view: last.map_or_else(String::new, |f| f.view.name().into()),
             scene: self.scene.as_ref().map_or_else(String::new, |s| s.loaded.name.clone()),
             triangles: self.scene.as_ref().map_or(0, |s| s.loaded.tris.len() as u64),

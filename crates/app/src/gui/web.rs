@@ -8,6 +8,7 @@
 //!   throw on a bad value;
 //! - `set_playing("play"|"pause")`, `seek("seconds")`: the animated scene's timeline;
 //! - `set_gpu_build("on"|"off")`: build flat and macrocell grids on the GPU;
+//! - `set_packets("on"|"off")`: trace primary and shadow rays in coherent 8×8 packets;
 //! - `open_bytes(name, Uint8Array)`: opens a .glb/.gltf as a dropped file would;
 //! - `dismiss_error()`: clears the error the UI shows (like its "dismiss" button);
 //! - `capture()` → id; then `last_frame()` → `{id, width, height, rgba: Uint8Array}` or null;
@@ -55,6 +56,7 @@ pub fn install(hook: Hook, runner: eframe::WebRunner) {
         ("set_playing", HookCommand::playing),
         ("seek", HookCommand::seek),
         ("set_gpu_build", HookCommand::gpu_build),
+        ("set_packets", HookCommand::packets),
     ];
     for (name, parse) in setters {
         let h = hook.clone();
