@@ -48,7 +48,7 @@ pub fn install(hook: Hook, runner: eframe::WebRunner) {
     set(&obj, "stats", f.as_ref());
     f.forget();
 
-    let setters: [(&str, fn(&str) -> Result<HookCommand, String>); 7] = [
+    let setters: [(&str, fn(&str) -> Result<HookCommand, String>); 8] = [
         ("set_grid", HookCommand::grid),
         ("set_view", HookCommand::view),
         ("set_traversal", HookCommand::traversal),
