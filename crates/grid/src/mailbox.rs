@@ -30,11 +30,22 @@ impl<const N: usize> Mailbox<N> {
     /// True if `tri` was already tested; otherwise records it and returns false.
     #[inline]
     pub fn check_and_insert(&mut self, tri: u32) -> bool {
-        let slot = tri as usize & (N - 1);
-        if self.ids[slot] == tri {
+        if self.contains(tri) {
             return true;
         }
-        self.ids[slot] = tri;
+        self.insert(tri);
         false
+    }
+
+    /// Whether `tri` was tested already.
+    #[inline]
+    pub fn contains(&self, tri: u32) -> bool {
+        self.ids[tri as usize & (N - 1)] == tri
+    }
+
+    /// Records `tri` as tested.
+    #[inline]
+    pub fn insert(&mut self, tri: u32) {
+        self.ids[tri as usize & (N - 1)] = tri;
     }
 }

@@ -107,6 +107,29 @@ impl Bounds {
     }
 }
 
+/// A slice's box of cells and the region of grid space the active rays cross in it.
+#[derive(Clone, Copy, Debug)]
+pub struct SliceRect {
+    pub lo: UVec3,
+    pub hi: UVec3,
+    /// Per axis, the lowest and highest grid coordinate of the region.
+    pub span: [(f64, f64); 3],
+}
+
+impl SliceRect {
+    /// Whether no active ray can meet triangle `tri` inside this slice: its bounding box in grid
+    /// space (computed as insertion computes it), widened by the insertion margin, misses the
+    /// region. Such a triangle is left for the slices where its box meets the rays (it is in
+    /// their cells too), and is not mailboxed here.
+    #[inline]
+    pub fn misses(&self, geom: &GridGeometry, tri: &[glam::Vec3; 3]) -> bool {
+        let g = tri.map(|p| (p - geom.min) * geom.inv_cell);
+        let (lo, hi) = (g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]));
+        let m = crate::geometry::INSERT_MARGIN_CELLS;
+        (0..3).any(|k| (hi[k] as f64) + m < self.span[k].0 || (lo[k] as f64) - m > self.span[k].1)
+    }
+}
+
 /// The walk of one packet: axis, direction, steps and the frustum of its active rays.
 #[derive(Clone, Copy, Debug)]
 pub struct SliceWalk {
@@ -211,12 +234,17 @@ impl SliceWalk {
     /// Whether walking the rays as a packet visits fewer cells than `ratio` times the cells
     /// they cross one by one: the frustum of rays that start or end far apart (shadow rays
     /// from different depths, tiles over silhouettes) can cover many more cells than the rays.
-    pub fn coherent_enough(&self, res: UVec3, ratio: f64) -> bool {
+    /// The slices' rectangles are kept in `rects` (step `first + i` at `i`), for the walk to
+    /// reuse until the frustum is updated.
+    pub fn coherent_enough(&self, res: UVec3, ratio: f64, rects: &mut Vec<Option<SliceRect>>) -> bool {
         let budget = ratio * self.single_ray_cells;
         let mut cells = 0.0;
+        rects.clear();
         for j in self.steps() {
-            if let Some((lo, hi)) = self.rect(j, res) {
-                let n = (hi - lo + UVec3::ONE).as_dvec3();
+            let rect = self.slice_rect(j, res);
+            rects.push(rect);
+            if let Some(r) = rect {
+                let n = (r.hi - r.lo + UVec3::ONE).as_dvec3();
                 cells += n.x * n.y * n.z;
                 if cells > budget {
                     return false;
@@ -224,6 +252,11 @@ impl SliceWalk {
             }
         }
         true
+    }
+
+    /// The first step of the walk.
+    pub fn first_step(&self) -> u32 {
+        self.first
     }
 
     /// Recomputes the frustum's bounds over the `active` lanes.
@@ -254,14 +287,23 @@ impl SliceWalk {
     /// margin, clamped to the grid); `None` when it lies outside the grid.
     #[inline]
     pub fn rect(&self, j: u32, res: UVec3) -> Option<(UVec3, UVec3)> {
+        self.slice_rect(j, res).map(|r| (r.lo, r.hi))
+    }
+
+    /// [`SliceWalk::rect`] with the region itself: per axis, the grid coordinates the active
+    /// rays' lines span in the slice (widened by the margin; on the walk axis, the slab).
+    #[inline]
+    pub fn slice_rect(&self, j: u32, res: UVec3) -> Option<SliceRect> {
         let a = self.axis;
         let (near, far) = self.planes(j);
         let b = &self.bounds;
         let m = SLICE_MARGIN_CELLS;
         let mut l = UVec3::ZERO;
         let mut h = UVec3::ZERO;
+        let mut span = [(0.0, 0.0); 3];
         let k = self.slice(j);
         (l[a], h[a]) = (k, k);
+        span[a] = (k as f64, k as f64 + 1.0);
         for (n, u) in [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate() {
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
             for s in [near, far] {
@@ -278,8 +320,9 @@ impl SliceWalk {
             // The floor, clamped to the grid (truncation of a non-negative value).
             l[u] = (lo.max(0.0) as u32).min(res[u] - 1);
             h[u] = (hi.max(0.0) as u32).min(res[u] - 1);
+            span[u] = (lo, hi);
         }
-        Some((l, h))
+        Some(SliceRect { lo: l, hi: h, span })
     }
 
     /// A step no later than the first at which [`SliceWalk::ends_ray`] is true for `lane` with

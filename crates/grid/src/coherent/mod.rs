@@ -12,6 +12,10 @@
 //! single rays and to brute force. A packet-wide mailbox skips a triangle already tested: the
 //! rays still active then were active when it was tested.
 //!
+//! A triangle whose bounding box (widened by the insertion margin) misses the region the rays
+//! cross in a slice is skipped there and not mailboxed ([`frustum::SliceRect::misses`]): no
+//! ray can meet it in that slice, and it is in the cells of every slice where one can.
+//!
 //! Packets whose rays do not share the sign of one axis (incoherent) are traced as single rays.
 //! The rectangles are computed per ray, not from four corner rays, so any packet works: camera
 //! tiles (common origin), shadow rays towards a point light (common end) or arbitrary rays.
@@ -143,6 +147,8 @@ pub struct Packet {
     active: Vec<u32>,
     rays: PacketRays,
     mailbox: Mailbox<PACKET_MAILBOX_SIZE>,
+    /// The slices' rectangles of the frustum as the packet starts.
+    rects: Vec<Option<frustum::SliceRect>>,
 }
 
 /// How a packet was traced.
@@ -168,7 +174,7 @@ impl Packet {
     ) -> PacketWalk {
         assert!(rays.len() == hits.len() && rays.len() == stats.len(), "one hit and one stats record per ray");
         let walk = SliceWalk::new(grid.geom(), rays, &mut self.lanes, &mut self.active)
-            .filter(|w| w.coherent_enough(grid.geom().res, COHERENCE_RATIO));
+            .filter(|w| w.coherent_enough(grid.geom().res, COHERENCE_RATIO, &mut self.rects));
         let Some(mut walk) = walk else {
             for ((r, h), s) in rays.iter().zip(hits.iter_mut()).zip(stats.iter_mut()) {
                 (*h, *s) = single(r);
@@ -194,24 +200,38 @@ impl Packet {
             };
         };
         let mut next_check = 0u32;
+        let mut updated = false;
         for j in walk.steps() {
             // cells_before[j]: the running total before step j.
             while self.cells_before.len() < j as usize {
                 self.cells_before.push(cells);
             }
             self.cells_before.push(cells);
-            let Some((lo, hi)) = walk.rect(j, res) else { continue };
+            // The rectangles of the frustum as it started, until it is updated.
+            let rect = if updated { walk.slice_rect(j, res) } else { self.rects[(j - walk.first_step()) as usize] };
+            let Some(rect) = rect else { continue };
+            let (lo, hi) = (rect.lo, rect.hi);
             let n = (hi - lo + UVec3::ONE).as_u64vec3();
             cells += n.x * n.y * n.z;
             let (best, mb, rays_soa) = (&mut self.best, &mut self.mailbox, &self.rays);
             let mut changed = false;
+            let geom = grid.geom();
             grid.for_each_occupied(lo, hi, &mut |refs| {
                 for &tri in refs {
-                    if mailbox && mb.check_and_insert(tri) {
+                    // Tested already, or out of the rays' reach in this slice (then left for
+                    // later slices: not mailboxed).
+                    if mailbox && mb.contains(tri) {
                         continue;
                     }
+                    let t = &tris[tri as usize];
+                    if rect.misses(geom, t) {
+                        continue;
+                    }
+                    if mailbox {
+                        mb.insert(tri);
+                    }
                     tests += 1;
-                    changed |= rays_soa.test(&tris[tri as usize], tri, best);
+                    changed |= rays_soa.test(t, tri, best);
                 }
             });
             // No ray can leave before `next_check` unless some ray's best hit changed.
@@ -241,6 +261,7 @@ impl Packet {
             if dead >= packet_test::LANES {
                 self.rays.gather(lanes, &self.active);
                 walk.update(lanes, &self.active);
+                updated = true;
             }
         }
         for &i in &self.active {
