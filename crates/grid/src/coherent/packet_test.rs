@@ -2,19 +2,19 @@
 //!
 //! The rays are grouped by the axis permutation of their watertight test (most packets have
 //! one). For a group, the triangle's corners are read at the group's permutation and the f32
-//! pre-filter of [`crate::triangle::certainly_outside`] runs for eight rays at once with the
-//! `wide` crate (AVX when the build enables it, two SSE halves on baseline x86-64, NEON or
-//! simd128 elsewhere, scalar otherwise), with the same operations in the same order, so it
-//! rejects exactly the rays the scalar pre-filter rejects. The rays it cannot reject take the
+//! pre-filter of [`crate::triangle::certainly_outside`] runs for eight rays at once: eight-lane
+//! arrays the compiler vectorizes, in versions for AVX2 (one 256-bit register), AVX and the
+//! baseline (two SSE halves on x86-64; NEON or simd128 elsewhere), picked at run time by the
+//! CPU's features (`multiversion`). Each lane does the scalar pre-filter's operations in the same
+//! order, so it rejects exactly the rays the scalar pre-filter rejects. The rays it cannot reject take the
 //! scalar [`crate::triangle::intersect`], so hits are those of single rays, bit for bit.
 
 use glam::Vec3;
 use gridrt_scene::Hit;
-use wide::f32x8;
 
 use super::frustum::Lane;
 use crate::ray::PreparedRay;
-use crate::triangle::{closer, intersect};
+use crate::triangle::{certainly_outside, closer, intersect};
 
 /// Rays per SIMD chunk.
 pub const LANES: usize = 8;
@@ -112,61 +112,64 @@ impl PacketRays {
     /// closest hit in `best`; true when some lane's hit changed.
     #[inline]
     pub fn test(&self, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) -> bool {
-        let mut changed = false;
-        let p: &[f32; 9] = bytemuck::cast_ref(tri);
-        for g in &self.groups {
-            let [kx, ky, kz] = g.perm;
-            let corner =
-                |v: usize| (f32x8::splat(p[3 * v + kx]), f32x8::splat(p[3 * v + ky]), f32x8::splat(p[3 * v + kz]));
-            let (a, b, c) = (corner(0), corner(1), corner(2));
-            for chunk in (g.start..g.start + g.len).step_by(LANES) {
-                let load = |v: &[f32]| f32x8::new(v[chunk..chunk + LANES].try_into().expect("eight lanes"));
-                let (ox, oy, oz, sx, sy) =
-                    (load(&self.ox), load(&self.oy), load(&self.oz), load(&self.sx), load(&self.sy));
-                // crate::triangle::intersect's shear, eight rays at once.
-                let sheared = |(x, y, z): (f32x8, f32x8, f32x8)| {
-                    let z = z - oz;
-                    ((x - ox) - sx * z, (y - oy) - sy * z)
-                };
-                let (ax, ay) = sheared(a);
-                let (bx, by) = sheared(b);
-                let (cx, cy) = sheared(c);
-                let mut keep = !certainly_outside8([ax, ay], [bx, by], [cx, cy]).to_bitmask() & 0xff;
-                while keep != 0 {
-                    let k = chunk + keep.trailing_zeros() as usize;
-                    keep &= keep - 1;
-                    let i = self.lane[k];
-                    if i == u32::MAX {
-                        continue;
-                    }
-                    let i = i as usize;
-                    if let Some(h) = intersect(&self.ray[k], tri)
-                        && closer(h.t, id, best[i].t, best[i].triangle)
-                    {
-                        best[i] = Hit { t: h.t, triangle: id, u: h.u, v: h.v };
-                        changed = true;
-                    }
-                }
-            }
-        }
-        changed
+        test_rays(self, tri, id, best)
     }
 }
 
-/// [`crate::triangle::certainly_outside`] for eight rays: all-ones lanes where the origin is
-/// certainly outside.
-#[inline]
-fn certainly_outside8(a: [f32x8; 2], b: [f32x8; 2], c: [f32x8; 2]) -> f32x8 {
-    let four_eps = f32x8::splat(crate::triangle::EDGE_ERROR_SCALE);
-    let tiny = f32x8::splat(crate::triangle::EDGE_ERROR_FLOOR);
-    let edge = |x: f32x8, y: f32x8, z: f32x8, w: f32x8| {
-        let (p, q) = (x * y, z * w);
-        (p - q, (p.abs() + q.abs()) * four_eps + tiny)
-    };
-    let (u, eu) = edge(c[0], b[1], c[1], b[0]);
-    let (v, ev) = edge(a[0], c[1], a[1], c[0]);
-    let (w, ew) = edge(b[0], a[1], b[1], a[0]);
-    let negative = u.simd_lt(-eu) | v.simd_lt(-ev) | w.simd_lt(-ew);
-    let positive = u.simd_gt(eu) | v.simd_gt(ev) | w.simd_gt(ew);
-    negative & positive
+/// [`PacketRays::test`], compiled for AVX2 and AVX besides the baseline and chosen at run time
+/// by the CPU's features (`multiversion`). The pre-filter's eight lanes are plain arrays the
+/// compiler vectorizes for each version: one AVX register, or two SSE halves. The operations and
+/// their order are the same in every version (no FMA contraction), so every version rejects the
+/// same rays.
+#[allow(unsafe_code)] // the dispatch `multiversion` generates: a version runs only where its features are detected
+#[multiversion::multiversion(targets("x86_64+avx2+fma", "x86_64+avx"))]
+fn test_rays(rays: &PacketRays, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) -> bool {
+    let mut changed = false;
+    let p: &[f32; 9] = bytemuck::cast_ref(tri);
+    for g in &rays.groups {
+        let [kx, ky, kz] = g.perm;
+        let corners = [0, 1, 2].map(|v| [p[3 * v + kx], p[3 * v + ky], p[3 * v + kz]]);
+        for chunk in (g.start..g.start + g.len).step_by(LANES) {
+            let lanes = |v: &[f32]| -> Lanes { v[chunk..chunk + LANES].try_into().expect("eight lanes") };
+            let o = [lanes(&rays.ox), lanes(&rays.oy), lanes(&rays.oz)];
+            let shear = [lanes(&rays.sx), lanes(&rays.sy)];
+            let mut keep = !certainly_outside8(&corners, &o, &shear) & 0xff;
+            while keep != 0 {
+                let k = chunk + keep.trailing_zeros() as usize;
+                keep &= keep - 1;
+                let i = rays.lane[k];
+                if i == u32::MAX {
+                    continue;
+                }
+                let i = i as usize;
+                if let Some(h) = intersect(&rays.ray[k], tri)
+                    && closer(h.t, id, best[i].t, best[i].triangle)
+                {
+                    best[i] = Hit { t: h.t, triangle: id, u: h.u, v: h.v };
+                    changed = true;
+                }
+            }
+        }
+    }
+    changed
+}
+
+/// Eight rays' values of one quantity.
+type Lanes = [f32; LANES];
+
+/// [`crate::triangle::intersect`]'s shear and [`crate::triangle::certainly_outside`] for eight
+/// rays (origins `o`, shear `s`) against one triangle's corners at their permutation: a bit per
+/// ray whose origin is certainly outside. Each lane calls the scalar rule; the loop vectorizes.
+#[inline(always)]
+fn certainly_outside8(corners: &[[f32; 3]; 3], o: &[Lanes; 3], s: &[Lanes; 2]) -> u32 {
+    let mut mask = 0u32;
+    for l in 0..LANES {
+        let sheared = |c: &[f32; 3]| {
+            let z = c[2] - o[2][l];
+            [(c[0] - o[0][l]) - s[0][l] * z, (c[1] - o[1][l]) - s[1][l] * z]
+        };
+        let outside = certainly_outside(sheared(&corners[0]), sheared(&corners[1]), sheared(&corners[2]));
+        mask |= u32::from(outside) << l;
+    }
+    mask
 }
