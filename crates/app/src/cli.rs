@@ -148,6 +148,13 @@ pub struct AnimateArgs {
     /// Image size WIDTHxHEIGHT (one primary and one shadow ray per pixel).
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     pub size: (u32, u32),
+    /// Coherent packets for the primary and shadow rays (CPU: flat, macrocell and proximity
+    /// grids in --tile packets; GPU: the flat and macrocell packet kernels, 8×8).
+    #[arg(long, value_enum, default_value = "on")]
+    pub packets: Switch,
+    /// Packet edge in pixels (CPU).
+    #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub tile: u32,
     /// Write every frame as DIR/frame_NNNNN.png.
     #[arg(long)]
     pub frames_dir: Option<PathBuf>,

@@ -179,6 +179,18 @@ fn animated_scene_info_pose_trace_animate_and_bench() {
     for f in ["timeline.csv", "timeline.json", "timeline.svg", "timeline.png"] {
         assert!(out.join(f).exists(), "animate --out lacks {f}");
     }
+    // Packets (the default) and single rays see the same hits and shadows every frame.
+    let counts = |packets: &str| -> (serde_json::Value, Vec<(u64, u64)>) {
+        let args = ["animate", s(&scene), "--frames", "2", "--size", "40x30", "--grid", "flat", "--packets", packets];
+        let v: serde_json::Value = serde_json::from_str(&ok(&[&args[..], &["--json"]].concat())).unwrap();
+        let f = v["frames"].as_array().unwrap().iter();
+        let counts = f.map(|f| (f["primary_hits"].as_u64().unwrap(), f["shadowed"].as_u64().unwrap())).collect();
+        (v["packets"].clone(), counts)
+    };
+    let (on, with) = counts("on");
+    let (off, without) = counts("off");
+    assert_eq!((on, off), (serde_json::json!(true), serde_json::json!(false)));
+    assert_eq!(with, without, "animate: packets change the hits");
 
     let bench = tmp("crowd-bench");
     let v: serde_json::Value = serde_json::from_str(&ok(&[

@@ -11,7 +11,7 @@ use gridrt_gpu::{GpuSession, RenderOptions};
 use serde::Serialize;
 
 use super::build_grid;
-use crate::cli::{AnimateArgs, Device};
+use crate::cli::{AnimateArgs, Device, Switch};
 use crate::lab::animation::FixedView;
 use crate::lab::report::{Chart, Series, progress, save_chart, write_rows};
 use gridrt_scene::Player;
@@ -53,6 +53,8 @@ struct Timeline<'a> {
     animation_name: Option<&'a str>,
     grid: String,
     backend: &'static str,
+    /// Primary and shadow rays in coherent packets.
+    packets: bool,
     width: u32,
     height: u32,
     fps: f64,
@@ -71,7 +73,10 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let (width, height) = args.size;
     let bounds = player.clip_bounds(16)?;
     let view = FixedView::new(&bounds, width, height);
-    let (opts, shade, primary, trace_opts) = (view.opts, &view.shade, &view.primary, view.trace_options());
+    let packets_on = args.packets == Switch::On;
+    let opts = RenderOptions { packets: packets_on, ..view.opts };
+    let (shade, primary, trace_opts) = (&view.shade, &view.primary, view.trace_options());
+    let packets = packets_on.then_some(gridrt_grid::PacketOptions { tile: args.tile, ..Default::default() });
     let ctx = match args.backend {
         Device::Gpu => Some(super::gpu_context()?),
         Device::Cpu => None,
@@ -101,9 +106,16 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         // shades after the timing).
         let (primary_hits, shadowed, traced, rgba) = match &ctx {
             None => {
-                let (hits, st) = grid.trace_batch(tris, primary, trace_opts, true);
+                let trace = |rays: &[gridrt_scene::Ray]| match packets {
+                    Some(p) => {
+                        let (h, s, _) = grid.trace_packets(tris, rays, width as usize, trace_opts, p, true);
+                        (h, s)
+                    }
+                    None => grid.trace_batch(tris, rays, trace_opts, true),
+                };
+                let (hits, st) = trace(primary);
                 crate::lab::frame::shadow_rays_from_hits(shade, primary, &hits, &mut shadow);
-                let (shadow_hits, sst) = grid.trace_batch(tris, &shadow, trace_opts, true);
+                let (shadow_hits, sst) = trace(&shadow);
                 let traced = Instant::now();
                 let rgba = args
                     .frames_dir
@@ -166,6 +178,7 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
             animation_name: clip.name.as_deref(),
             grid: cfg.kind.name().into(),
             backend,
+            packets: packets_on,
             width,
             height,
             fps: args.fps,
@@ -177,12 +190,13 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     }
     let name = clip.name.as_deref().map(|n| format!(" {n:?}")).unwrap_or_default();
     println!(
-        "{source} ({} triangles), animation {}{name}: {} frames at {} fps, {} grid rebuilt every frame, {width}x{height} primary + shadow rays on the {backend}",
+        "{source} ({} triangles), animation {}{name}: {} frames at {} fps, {} grid rebuilt every frame, {width}x{height} primary + shadow rays on the {backend}{}",
         player.tris.len(),
         clip.index,
         rows.len(),
         args.fps,
-        cfg.kind
+        cfg.kind,
+        if packets_on { " in packets" } else { "" }
     );
     println!(
         "per frame: pose {:.2} ms, build {:.2} ms, trace {:.2} ms, total {:.2} ms ({:.1} frames/s)",
