@@ -30,10 +30,13 @@ const PACKET_SLACK: f32 = 1e-6;
 const KEY_DIR: u32 = 0u;
 const KEY_ORG: u32 = 6u;
 const KEY_END: u32 = 12u;
-var<workgroup> wg_axis_keys: array<atomic<u32>, 18>;
+// The axis keys at AXIS_KEYS, the line keys (below) at LINE_KEYS.
+const AXIS_KEYS: u32 = 0u;
+const LINE_KEYS: u32 = 18u;
+var<workgroup> wg_keys: array<atomic<u32>, 36>;
 // Per reference plane p (0: origins, 1: ends) and other axis k: intercept min (inverted) and max
-// at 4p + 2k, +1; slopes' min (inverted) and max at 8 + 2k, +1; the steps' first (inverted) and last at 12, 13.
-var<workgroup> wg_line_keys: array<atomic<u32>, 14>;
+// at 4p + 2k, +1; slopes' min (inverted) and max at 8 + 2k, +1; the steps' first (inverted) and
+// last at 12, 13 (18 entries, as the axis keys, so one function loads both).
 // Plain copies for uniform loads.
 var<workgroup> wg_copy: array<u32, 18>;
 
@@ -51,25 +54,33 @@ fn slack(magnitude: f32) -> f32 {
     return PACKET_MARGIN + PACKET_SLACK * magnitude;
 }
 
-// The reductions' results, copied into `wg_copy` and loaded uniformly (barriers included).
-fn uniform_axis_keys() -> array<u32, 18> {
+// A reduction's results, copied into `wg_copy` and loaded uniformly (barriers included).
+fn uniform_keys(base: u32) -> array<u32, 18> {
     workgroupBarrier();
     if all(local_id == vec3<u32>(0u)) {
         for (var k = 0u; k < 18u; k++) {
-            wg_copy[k] = atomicLoad(&wg_axis_keys[k]);
+            wg_copy[k] = atomicLoad(&wg_keys[base + k]);
         }
     }
     return workgroupUniformLoad(&wg_copy);
 }
 
-fn uniform_line_keys() -> array<u32, 18> {
-    workgroupBarrier();
-    if all(local_id == vec3<u32>(0u)) {
-        for (var k = 0u; k < 14u; k++) {
-            wg_copy[k] = atomicLoad(&wg_line_keys[k]);
+// Tests the triangles of every cell in the box lo..=hi of a flat cell table (`cell_start`)
+// whose cell is among this ray's own (own_lo..=own_hi) against this invocation's ray.
+fn test_cells(lo: vec3<u32>, hi: vec3<u32>, own_lo: vec3<u32>, own_hi: vec3<u32>) {
+    let use_mailbox = params.mailbox != 0u;
+    for (var z = max(lo.z, own_lo.z); z <= min(hi.z, own_hi.z); z++) {
+        for (var y = max(lo.y, own_lo.y); y <= min(hi.y, own_hi.y); y++) {
+            let row = params.res.x * (y + params.res.y * z);
+            for (var x = max(lo.x, own_lo.x); x <= min(hi.x, own_hi.x); x++) {
+                visit_cell();
+                let idx = row + x;
+                for (var k = cell_start[idx]; k < cell_start[idx + 1u]; k++) {
+                    test_triangle(refs[k], use_mailbox);
+                }
+            }
         }
     }
-    return workgroupUniformLoad(&wg_copy);
 }
 
 var<private> local_id: vec3<u32>;
@@ -100,15 +111,15 @@ fn trace_packets(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
     if live {
         let end = g.o + g.d * g.t1;
         for (var a = 0u; a < 3u; a++) {
-            atomicMax(&wg_axis_keys[KEY_DIR + 2u * a], ~order_key(g.d[a]));
-            atomicMax(&wg_axis_keys[KEY_DIR + 2u * a + 1u], order_key(g.d[a]));
-            atomicMax(&wg_axis_keys[KEY_ORG + 2u * a], ~order_key(g.o[a]));
-            atomicMax(&wg_axis_keys[KEY_ORG + 2u * a + 1u], order_key(g.o[a]));
-            atomicMax(&wg_axis_keys[KEY_END + 2u * a], ~order_key(end[a]));
-            atomicMax(&wg_axis_keys[KEY_END + 2u * a + 1u], order_key(end[a]));
+            atomicMax(&wg_keys[AXIS_KEYS + KEY_DIR + 2u * a], ~order_key(g.d[a]));
+            atomicMax(&wg_keys[AXIS_KEYS + KEY_DIR + 2u * a + 1u], order_key(g.d[a]));
+            atomicMax(&wg_keys[AXIS_KEYS + KEY_ORG + 2u * a], ~order_key(g.o[a]));
+            atomicMax(&wg_keys[AXIS_KEYS + KEY_ORG + 2u * a + 1u], order_key(g.o[a]));
+            atomicMax(&wg_keys[AXIS_KEYS + KEY_END + 2u * a], ~order_key(end[a]));
+            atomicMax(&wg_keys[AXIS_KEYS + KEY_END + 2u * a + 1u], order_key(end[a]));
         }
     }
-    let keys = uniform_axis_keys();
+    let keys = uniform_keys(AXIS_KEYS);
     // Any real float's key is above zero.
     let any_valid = keys[KEY_DIR + 1u] != 0u;
     // The walk axis: the dominant axis of the middle of the directions' box; the packet is
@@ -147,14 +158,14 @@ fn trace_packets(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         for (var k = 0u; k < 2u; k++) {
             let slope = g.d[u[k]] * t_per_cell;
             let slope_err = PACKET_SLACK * abs(slope);
-            atomicMax(&wg_line_keys[8u + 2u * k], ~order_key(slope - slope_err));
-            atomicMax(&wg_line_keys[9u + 2u * k], order_key(slope + slope_err));
+            atomicMax(&wg_keys[LINE_KEYS + 8u + 2u * k], ~order_key(slope - slope_err));
+            atomicMax(&wg_keys[LINE_KEYS + 9u + 2u * k], order_key(slope + slope_err));
             for (var p = 0u; p < 2u; p++) {
                 let run = slope * (planes[p] - g.o[axis]);
                 let c = g.o[u[k]] + run;
                 let err = PACKET_SLACK * (abs(g.o[u[k]]) + abs(run) + abs(c));
-                atomicMax(&wg_line_keys[4u * p + 2u * k], ~order_key(c - err));
-                atomicMax(&wg_line_keys[4u * p + 2u * k + 1u], order_key(c + err));
+                atomicMax(&wg_keys[LINE_KEYS + 4u * p + 2u * k], ~order_key(c - err));
+                atomicMax(&wg_keys[LINE_KEYS + 4u * p + 2u * k + 1u], order_key(c + err));
             }
         }
         let e = g.o[axis] + g.d[axis] * g.t0;
@@ -168,10 +179,10 @@ fn trace_packets(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
             first = n_axis - 1u - slice_of(e + m0, n_axis);
             last = n_axis - 1u - slice_of(x - m1, n_axis);
         }
-        atomicMax(&wg_line_keys[12], ~first);
-        atomicMax(&wg_line_keys[13], last);
+        atomicMax(&wg_keys[LINE_KEYS + 12], ~first);
+        atomicMax(&wg_keys[LINE_KEYS + 13], last);
     }
-    let lines = uniform_line_keys();
+    let lines = uniform_keys(LINE_KEYS);
     var c_lo: array<array<f32, 2>, 2>;
     var c_hi: array<array<f32, 2>, 2>;
     var spread = array<f32, 2>(0.0, 0.0);

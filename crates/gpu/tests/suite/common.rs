@@ -29,3 +29,25 @@ pub fn default_scene(ctx: &'static GpuContext) -> (Vec<[Vec3; 3]>, GpuSession<'s
     let session = GpuSession::new(ctx, &tris, mesh.bounds()).unwrap();
     (tris, session)
 }
+
+/// Copies a display target's texture into a buffer (after what `enc` holds) and reads its RGBA8
+/// texels back; the width times 4 must meet the 256-byte row alignment.
+pub fn read_texture(ctx: &GpuContext, target: &gridrt_gpu::FrameTarget, mut enc: wgpu::CommandEncoder) -> Vec<u8> {
+    let (w, h) = (target.width, target.height);
+    let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: (w * h * 4) as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    enc.copy_texture_to_buffer(
+        target.texture.as_ref().expect("a display target").as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &readback,
+            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: None },
+        },
+        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+    );
+    ctx.queue.submit([enc.finish()]);
+    gridrt_gpu::trace::read_back(ctx, &readback, (w * h * 4) as u64, "texture").unwrap()
+}

@@ -7,13 +7,13 @@
 use glam::Vec3;
 use gridrt_gpu::cpu::{camera_rays, gpu_camera, shadow_ray};
 use gridrt_gpu::render::shade_params;
-use gridrt_gpu::trace::{read_back, tile_quantum};
+use gridrt_gpu::trace::tile_quantum;
 use gridrt_gpu::{FrameTarget, GpuSession, RenderOptions, View};
 use gridrt_grid::{GridConfig, GridKind, Traversal, structure};
 use gridrt_scene::procedural::{SceneKind, generate};
 use gridrt_scene::{Aabb, Camera, Hit};
 
-use super::common::{default_scene, gpu};
+use super::common::{default_scene, gpu, read_texture};
 
 /// The auto view, a close view, two views from inside the box with a wide field of view, and
 /// a grazing view along the bottom face.
@@ -115,23 +115,7 @@ fn rendering_with_packets_gives_the_same_frames() {
             ctx.queue.submit([enc.finish()]);
             first += n;
         }
-        let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("texture readback"),
-            size: (w * h * 4) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        enc.copy_texture_to_buffer(
-            target.texture.as_ref().unwrap().as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &readback,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: None },
-            },
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-        );
-        ctx.queue.submit([enc.finish()]);
-        let texels: Vec<u8> = read_back(ctx, &readback, (w * h * 4) as u64, "texture").unwrap();
+        let texels = read_texture(ctx, &target, ctx.device.create_command_encoder(&Default::default()));
         assert_eq!(texels, a.rgba, "{kind}: tiles of {count} pixels in packets");
     }
     ctx.check_device().unwrap();

@@ -3,12 +3,12 @@
 
 use gridrt_gpu::cpu::{camera_rays, gpu_camera, present_totals, shade_pixel, shadow_ray};
 use gridrt_gpu::render::{MAX_TILE_PIXELS, shade_params, tile_limit};
-use gridrt_gpu::trace::{read_back, tile_quantum};
+use gridrt_gpu::trace::tile_quantum;
 use gridrt_gpu::{FrameTarget, RenderOptions, View};
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{GridConfig, GridKind, Traversal, structure};
 
-use super::common::{default_scene, gpu};
+use super::common::{default_scene, gpu, read_texture};
 
 #[test]
 fn default_scene_renders_deterministically_and_matches_the_cpu() {
@@ -147,22 +147,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
                 assert!(renderer.encode_tile(ctx, &mut e2, &gpu.source(&gs), &opts, &target, 0..n + 1).is_err());
                 assert!(renderer.encode_tile(ctx, &mut e2, &gpu.source(&gs), &opts, &target, n - 1..n + 1).is_err());
             }
-            let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("texture readback"),
-                size: (w * h * 4) as u64,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            enc.copy_texture_to_buffer(
-                target.texture.as_ref().unwrap().as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &readback,
-                    layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: None },
-                },
-                wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-            );
-            ctx.queue.submit([enc.finish()]);
-            let texels: Vec<u8> = read_back(ctx, &readback, (w * h * 4) as u64, "texture").unwrap();
+            let texels = read_texture(ctx, &target, enc);
             assert_eq!(texels, reference.rgba, "{}: texture differs from the pixels (round {round})", view.name());
             let (tx, rx) = std::sync::mpsc::channel();
             target.totals_read.slice(..).map_async(wgpu::MapMode::Read, move |r| tx.send(r).unwrap());
