@@ -718,10 +718,17 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
     for name in ["flat", "macrocell", "multires", "twolevel", "proximity", "bvh (build_par)", "obvhs BVH2 fastest"] {
         assert!(structures.contains(&name), "{name} missing from {structures:?}");
     }
-    assert_eq!(rows.len() % 10, 0, "5 grids + 5 peer configurations per scene and ray set");
+    // 5 grids + 5 peer configurations per scene and ray set, and on the camera sets 3 rows of
+    // packets (flat, macrocell, proximity).
     for set in ["framed", "random"] {
-        assert!(rows.iter().any(|r| r["rays"] == set), "no {set} rows");
+        let of_set: Vec<_> = rows.iter().filter(|r| r["rays"] == set).collect();
+        let packets = of_set.iter().filter(|r| r["family"] == "grid packets").count();
+        assert!(!of_set.is_empty(), "no {set} rows");
+        let scenes = 2;
+        let want = if set == "random" { 0 } else { 3 * scenes };
+        assert_eq!((of_set.len(), packets), (10 * scenes + want, want), "{set} rows");
     }
+    assert!(structures.contains(&"flat, 8×8 packets"), "{structures:?}");
     for r in rows {
         assert!(r["mrays_s"].as_f64().unwrap() > 0.0, "{r}");
         let share = r["hit_share"].as_f64().unwrap();
@@ -736,6 +743,9 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
         if r["shared_triangle_test"] == true {
             assert_eq!(r["mismatches"], 0, "{r}");
         }
+        if r["family"] == "grid packets" {
+            assert!(r["gpu_mrays_s"].is_null(), "packet rows are CPU rows: {r}");
+        }
         if r["family"] == "grid" && !skip_gpu() {
             assert!(r["gpu_mrays_s"].as_f64().unwrap() > 0.0, "{r}");
         }
@@ -746,6 +756,7 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
     for t in [
         "best grid / best BVH Mrays/s, framed",
         "best grid / best BVH Mrays/s, random",
+        "best grid packets / best BVH Mrays/s, framed",
         "auto m time / best swept time (CPU)",
     ] {
         assert!(targets.iter().any(|x| x["target"] == t), "target {t} missing");
