@@ -148,13 +148,8 @@ pub struct AnimateArgs {
     /// Image size WIDTHxHEIGHT (one primary and one shadow ray per pixel).
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Coherent packets for the primary and shadow rays (CPU: flat, macrocell and proximity
-    /// grids in --tile packets; GPU: the flat and macrocell packet kernels, 8×8).
-    #[arg(long, value_enum, default_value = "on")]
-    pub packets: Switch,
-    /// Packet edge in pixels (CPU).
-    #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub tile: u32,
+    #[command(flatten)]
+    pub packets: PacketArgs,
     /// Write every frame as DIR/frame_NNNNN.png.
     #[arg(long)]
     pub frames_dir: Option<PathBuf>,
@@ -164,6 +159,29 @@ pub struct AnimateArgs {
     /// Print the timeline as JSON on stdout (and nothing else there).
     #[arg(long)]
     pub json: bool,
+}
+
+/// Coherent packets for a frame's primary and shadow rays (`render`, `animate`).
+#[derive(Clone, Copy, Debug, Args)]
+pub struct PacketArgs {
+    /// Coherent packets for the primary and shadow rays (CPU: flat, macrocell and proximity
+    /// grids in --tile packets; GPU: the flat and macrocell packet kernels, 8×8).
+    #[arg(long, value_enum, default_value = "on")]
+    pub packets: Switch,
+    /// Packet edge in pixels (the GPU's is 8).
+    #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub tile: u32,
+}
+
+impl PacketArgs {
+    pub fn on(&self) -> bool {
+        self.packets == Switch::On
+    }
+
+    /// The CPU's packet settings, `None` for single rays.
+    pub fn options(&self, mailbox: bool) -> Option<gridrt_grid::PacketOptions> {
+        self.on().then_some(gridrt_grid::PacketOptions { tile: self.tile, mailbox })
+    }
 }
 
 /// On or off (`render --packets`).
@@ -420,13 +438,8 @@ pub struct RenderArgs {
     /// Where the rays are traced: gpu (the WGSL kernels) or cpu (all threads).
     #[arg(long, value_enum, default_value = "gpu")]
     pub backend: Device,
-    /// Coherent packets for the primary and shadow rays (CPU: flat, macrocell and proximity
-    /// grids; the GPU kernels trace single rays).
-    #[arg(long, value_enum, default_value = "on")]
-    pub packets: Switch,
-    /// Packet edge in pixels.
-    #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub tile: u32,
+    #[command(flatten)]
+    pub packets: PacketArgs,
     /// Write the per-pixel primary hits (row-major) in the hits format.
     #[arg(long)]
     pub hits_out: Option<PathBuf>,

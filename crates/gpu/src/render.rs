@@ -303,9 +303,7 @@ impl Renderer {
         q.write_buffer(&t.camera, 0, bytemuck::bytes_of(&cam));
         let sp = ShadeParams { first_pixel: first, pixel_count: count, ..shade_params(bounds, o) };
         q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&sp));
-        let image = o.packets.then_some(crate::trace::ImageRays { width: o.width, first });
-        let image_width = if o.packets { o.width } else { 0 };
-        let tp = GridParams { ray_count: count, mailbox: o.mailbox as u32, first_ray: first, image_width, ..s.params };
+        let (tp, image) = crate::trace::dispatch_params(s, (first, count), o.mailbox, o.packets.then_some(o.width));
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
 
         let groups = count.div_ceil(WORKGROUP);

@@ -120,7 +120,7 @@ pub struct TraceJob<'a> {
     pub walker: GpuWalker,
     /// The rays are pixels `first .. first + count` of a row-major image this many pixels wide:
     /// traced in 8×8 packets where the structure has a packet kernel. `params` must hold the
-    /// same `first_ray` and `image_width`.
+    /// same `first_ray` and `image_width` ([`dispatch_params`] makes both).
     pub image: Option<ImageRays>,
 }
 
@@ -129,6 +129,26 @@ pub struct TraceJob<'a> {
 pub struct ImageRays {
     pub width: u32,
     pub first: u32,
+}
+
+/// The parameters of a dispatch over `count` rays from ray `first` of the whole set, and where
+/// they lie in the image `image_width` pixels wide when they are traced as one (in packets):
+/// the uniform and [`TraceJob::image`] agree by construction.
+pub fn dispatch_params(
+    s: &GpuStructure,
+    (first, count): (u32, u32),
+    mailbox: bool,
+    image_width: Option<u32>,
+) -> (GridParams, Option<ImageRays>) {
+    let image = image_width.map(|width| ImageRays { width, first });
+    let params = GridParams {
+        ray_count: count,
+        mailbox: mailbox as u32,
+        first_ray: first,
+        image_width: image_width.unwrap_or(0),
+        ..s.params
+    };
+    (params, image)
 }
 
 impl Tracer {
@@ -274,10 +294,7 @@ impl Tracer {
         let mut all_stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
             let count = part.len() as u32;
-            let first = (ci * chunk) as u32;
-            let image_width = width.unwrap_or(0);
-            let p = GridParams { ray_count: count, mailbox: mailbox as u32, first_ray: first, image_width, ..s.params };
-            let image = width.map(|width| ImageRays { width, first });
+            let (p, image) = dispatch_params(s, ((ci * chunk) as u32, count), mailbox, width);
             ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
             ctx.queue.write_buffer(&b.rays, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });

@@ -11,7 +11,7 @@ use gridrt_gpu::{GpuSession, RenderOptions};
 use serde::Serialize;
 
 use super::build_grid;
-use crate::cli::{AnimateArgs, Device, Switch};
+use crate::cli::{AnimateArgs, Device};
 use crate::lab::animation::FixedView;
 use crate::lab::report::{Chart, Series, progress, save_chart, write_rows};
 use gridrt_scene::Player;
@@ -73,10 +73,10 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let (width, height) = args.size;
     let bounds = player.clip_bounds(16)?;
     let view = FixedView::new(&bounds, width, height);
-    let packets_on = args.packets == Switch::On;
+    let packets_on = args.packets.on();
     let opts = RenderOptions { packets: packets_on, ..view.opts };
     let (shade, primary, trace_opts) = (&view.shade, &view.primary, view.trace_options());
-    let packets = packets_on.then_some(gridrt_grid::PacketOptions { tile: args.tile, ..Default::default() });
+    let packets = args.packets.options(trace_opts.mailbox);
     let ctx = match args.backend {
         Device::Gpu => Some(super::gpu_context()?),
         Device::Cpu => None,
@@ -106,16 +106,11 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         // shades after the timing).
         let (primary_hits, shadowed, traced, rgba) = match &ctx {
             None => {
-                let trace = |rays: &[gridrt_scene::Ray]| match packets {
-                    Some(p) => {
-                        let (h, s, _) = grid.trace_packets(tris, rays, width as usize, trace_opts, p, true);
-                        (h, s)
-                    }
-                    None => grid.trace_batch(tris, rays, trace_opts, true),
-                };
-                let (hits, st) = trace(primary);
+                let trace =
+                    |rays| crate::lab::frame::trace_frame(&grid, tris, rays, width as usize, trace_opts, packets);
+                let (hits, st, _) = trace(primary);
                 crate::lab::frame::shadow_rays_from_hits(shade, primary, &hits, &mut shadow);
-                let (shadow_hits, sst) = trace(&shadow);
+                let (shadow_hits, sst, _) = trace(&shadow);
                 let traced = Instant::now();
                 let rgba = args
                     .frames_dir

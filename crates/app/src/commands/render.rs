@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use serde_json::json;
 
 use super::build_grid;
-use crate::cli::{Device, RenderArgs, Switch};
+use crate::cli::{Device, RenderArgs};
 
 /// What one frame cost and gave.
 struct Rendered {
@@ -56,17 +56,18 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         traversal: args.traversal,
         mailbox: !args.no_mailbox,
         heat_max: args.heat_max,
-        packets: args.packets == Switch::On,
+        packets: args.packets.on(),
     };
-    let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&camera, width, height));
-    let packets_on = args.packets == Switch::On;
+    // The CPU's rays (the GPU makes its own): traced on the CPU, or written with --rays-out.
+    let primary = (args.backend == Device::Cpu || args.rays_out.is_some())
+        .then(|| gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&camera, width, height)));
+    let tile = args.packets.tile;
     let (frame, adapter) = match args.backend {
         Device::Gpu => {
             anyhow::ensure!(
-                !packets_on || args.tile == gridrt_gpu::Kernel::PACKET_EDGE,
-                "the GPU's packet kernels trace {0}x{0} packets: --tile {1} needs --backend cpu",
+                !opts.packets || tile == gridrt_gpu::Kernel::PACKET_EDGE,
+                "the GPU's packet kernels trace {0}x{0} packets: --tile {tile} needs --backend cpu",
                 gridrt_gpu::Kernel::PACKET_EDGE,
-                args.tile
             );
             let ctx = super::gpu_context()?;
             let gpu = GpuSession::new(&ctx, &tris, bounds)?;
@@ -92,11 +93,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         Device::Cpu => {
             anyhow::ensure!(
-                !(args.view.is_heatmap() && packets_on && grid.has_packets()),
+                !(args.view.is_heatmap() && opts.packets && grid.has_packets()),
                 "the heatmap views need per-ray counts, which packets do not keep: add --packets off"
             );
-            let packets = packets_on.then_some(PacketOptions { tile: args.tile, mailbox: !args.no_mailbox });
-            (cpu_frame(&grid, &tris, &bounds, &opts, &primary, packets), None)
+            let primary = primary.as_deref().expect("the CPU's rays");
+            (cpu_frame(&grid, &tris, &bounds, &opts, primary, args.packets.options(opts.mailbox)), None)
         }
     };
     image::save_buffer(&args.output, &frame.rgba, width, height, image::ExtendedColorType::Rgba8)
@@ -104,10 +105,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.hits_out {
         gridrt_scene::rays::write_hits(path, &frame.hits).with_context(|| format!("writing {}", path.display()))?;
     }
-    if let Some(path) = &args.rays_out {
-        gridrt_scene::rays::write_rays(path, &primary).with_context(|| format!("writing {}", path.display()))?;
+    if let (Some(path), Some(primary)) = (&args.rays_out, &primary) {
+        gridrt_scene::rays::write_rays(path, primary).with_context(|| format!("writing {}", path.display()))?;
     }
-    let rays = primary.len();
+    let rays = frame.hits.len();
     let hits = frame.hits.iter().filter(|h| h.is_hit()).count();
     let backend = match args.backend {
         Device::Cpu => "cpu",
@@ -119,7 +120,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             "adapter": adapter, "view": args.view.name(), "width": width, "height": height, "rays": rays, "hits": hits,
             "primary_ms": frame.primary_ms, "shadow_ms": frame.shadow_ms, "build_ms": b.times.total(),
             "packets": frame.packets.packets, "single_ray_packets": frame.packets.single_ray_packets,
-            "tile": if frame.packets.packets > 0 { Some(args.tile) } else { None },
+            "tile": if frame.packets.packets > 0 { Some(tile) } else { None },
             "cells_per_ray": frame.cells_per_ray, "tests_per_ray": frame.tests_per_ray,
             "output": args.output,
         });
@@ -134,16 +135,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         args.view.name()
     );
     let packets = match (args.backend, frame.packets.packets + frame.packets.single_ray_packets) {
-        (Device::Gpu, 0) if packets_on => {
+        (Device::Gpu, 0) if opts.packets => {
             format!("; packets: none (the {} grid's kernel traces single rays)", grid.kind())
         }
         (Device::Gpu, 0) => String::new(),
         (Device::Gpu, n) => format!("; 8x8 packets: {n} workgroups (incoherent ones trace single rays)"),
-        (_, 0) if packets_on => format!("; packets: none (the {} grid traces single rays)", grid.kind()),
+        (_, 0) if opts.packets => format!("; packets: none (the {} grid traces single rays)", grid.kind()),
         (_, 0) => String::new(),
         (_, _) => format!(
             "; {0}x{0} packets: {1} walked slice by slice, {2} incoherent (single rays)",
-            args.tile, frame.packets.packets, frame.packets.single_ray_packets
+            tile, frame.packets.packets, frame.packets.single_ray_packets
         ),
     };
     let mrays = |ms: f64| rays as f64 / ms / 1e3;
@@ -208,22 +209,14 @@ fn cpu_frame(
     // Per-ray counts only for the heatmaps (single rays; packets keep none).
     let per_ray = opts.view.is_heatmap();
     let trace = |rays: &[Ray]| -> (Vec<Hit>, Vec<gridrt_grid::RayStats>, gridrt_grid::BatchStats, PacketStats) {
-        match packets {
-            Some(p) => {
-                let (h, b, ps) = grid.trace_packets(tris, rays, width, topts, p, true);
-                (h, Vec::new(), b, ps)
-            }
-            None if per_ray => {
-                let (h, s): (Vec<Hit>, Vec<_>) = rays.par_iter().map(|r| grid.trace(tris, r, topts)).unzip();
-                let mut b = gridrt_grid::BatchStats::default();
-                h.iter().zip(&s).for_each(|(h, s)| b.add(*s, h.is_hit()));
-                (h, s, b, PacketStats::default())
-            }
-            None => {
-                let (h, b) = grid.trace_batch(tris, rays, topts, true);
-                (h, Vec::new(), b, PacketStats::default())
-            }
+        if per_ray && packets.is_none() {
+            let (h, s): (Vec<Hit>, Vec<_>) = rays.par_iter().map(|r| grid.trace(tris, r, topts)).unzip();
+            let mut b = gridrt_grid::BatchStats::default();
+            h.iter().zip(&s).for_each(|(h, s)| b.add(*s, h.is_hit()));
+            return (h, s, b, PacketStats::default());
         }
+        let (h, b, ps) = crate::lab::frame::trace_frame(grid, tris, rays, width, topts, packets);
+        (h, Vec::new(), b, ps)
     };
     let start = Instant::now();
     let (hits, stats, batch, ps) = trace(primary);

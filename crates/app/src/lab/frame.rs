@@ -4,9 +4,28 @@
 
 use glam::Vec3;
 use gridrt_gpu::layout::ShadeParams;
-use gridrt_grid::RayStats;
+use gridrt_grid::{AnyGrid, BatchStats, PacketOptions, PacketStats, RayStats, TraceOptions};
 use gridrt_scene::{Hit, Ray};
 use rayon::prelude::*;
+
+/// A frame's rays (row-major, `width` per row) traced on all threads: in coherent packets when
+/// `packets` is given (single rays for the kinds without packets), else one by one.
+pub fn trace_frame(
+    grid: &AnyGrid,
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    width: usize,
+    opts: TraceOptions,
+    packets: Option<PacketOptions>,
+) -> (Vec<Hit>, BatchStats, PacketStats) {
+    match packets {
+        Some(p) => grid.trace_packets(tris, rays, width, opts, p, true),
+        None => {
+            let (hits, stats) = grid.trace_batch(tris, rays, opts, true);
+            (hits, stats, PacketStats::default())
+        }
+    }
+}
 
 /// shaders/shadow.wgsl `shadow_rays_from_hits` over a frame, in parallel, into `out` (reused).
 pub fn shadow_rays_from_hits(shade: &ShadeParams, primary: &[Ray], hits: &[Hit], out: &mut Vec<Ray>) {

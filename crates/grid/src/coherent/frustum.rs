@@ -241,7 +241,7 @@ impl SliceWalk {
         let mut cells = 0.0;
         rects.clear();
         for j in self.steps() {
-            let rect = self.slice_rect(j, res);
+            let rect = self.rect(j, res);
             rects.push(rect);
             if let Some(r) = rect {
                 let n = (r.hi - r.lo + UVec3::ONE).as_dvec3();
@@ -284,16 +284,11 @@ impl SliceWalk {
     }
 
     /// The box of cells the active rays' lines cross in step `j`'s slice (widened by the
-    /// margin, clamped to the grid); `None` when it lies outside the grid.
+    /// margin, clamped to the grid) and the region itself: per axis, the grid coordinates the
+    /// lines span in the slice (on the walk axis, the slab); `None` when it lies outside the
+    /// grid.
     #[inline]
-    pub fn rect(&self, j: u32, res: UVec3) -> Option<(UVec3, UVec3)> {
-        self.slice_rect(j, res).map(|r| (r.lo, r.hi))
-    }
-
-    /// [`SliceWalk::rect`] with the region itself: per axis, the grid coordinates the active
-    /// rays' lines span in the slice (widened by the margin; on the walk axis, the slab).
-    #[inline]
-    pub fn slice_rect(&self, j: u32, res: UVec3) -> Option<SliceRect> {
+    pub fn rect(&self, j: u32, res: UVec3) -> Option<SliceRect> {
         let a = self.axis;
         let (near, far) = self.planes(j);
         let b = &self.bounds;

@@ -209,7 +209,7 @@ impl Packet {
             }
             self.cells_before.push(cells);
             // The rectangles of the frustum as it started, until it is updated.
-            let rect = if updated { walk.slice_rect(j, res) } else { self.rects[(j - walk.first_step()) as usize] };
+            let rect = if updated { walk.rect(j, res) } else { self.rects[(j - walk.first_step()) as usize] };
             let Some(rect) = rect else { continue };
             let (lo, hi) = (rect.lo, rect.hi);
             let n = (hi - lo + UVec3::ONE).as_u64vec3();

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{CostModel, GridConfig, GridKind, structure};
+use gridrt_grid::{CostModel, GridConfig, GridKind, PacketOptions, structure};
 use gridrt_scene::{Hit, LoadLimits, Ray};
 use serde::Serialize;
 
@@ -115,8 +115,8 @@ impl Strategy {
 
 /// A structure built for one frame.
 enum Built {
-    /// A grid, and whether it traces packets.
-    Grid(gridrt_grid::AnyGrid, bool),
+    /// A grid, and its packets (`None`: single rays).
+    Grid(gridrt_grid::AnyGrid, Option<PacketOptions>),
     #[cfg(feature = "peers")]
     Peer(super::peers::PeerBvh),
 }
@@ -124,10 +124,7 @@ enum Built {
 impl Built {
     fn trace(&self, tris: &[[glam::Vec3; 3]], rays: &[Ray], opts: TraceOptions) -> Vec<Hit> {
         match self {
-            Built::Grid(g, false) => g.trace_batch(tris, rays, opts, true).0,
-            Built::Grid(g, true) => {
-                g.trace_packets(tris, rays, SIZE as usize, opts, gridrt_grid::PacketOptions::default(), true).0
-            }
+            Built::Grid(g, packets) => crate::lab::frame::trace_frame(g, tris, rays, SIZE as usize, opts, *packets).0,
             #[cfg(feature = "peers")]
             Built::Peer(p) => p.trace_batch(tris, rays),
         }
@@ -153,10 +150,11 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<()> {
     files.push(crowd);
     let strategies = Strategy::all(!args.no_peers);
     let frames = args.frames.max(1) as usize;
+    let packets = PacketOptions { tile: args.tile, mailbox: true };
     let pb = progress((files.len() * frames) as u64, "dynamic");
     let mut rows = Vec::new();
     for f in &files {
-        rows.extend(bench_scene(f, &strategies, frames, cost, &pb)?);
+        rows.extend(bench_scene(f, &strategies, (frames, packets), cost, &pb)?);
     }
     pb.finish_and_clear();
     let targets = evaluate(&rows);
@@ -210,7 +208,7 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<()> {
 fn bench_scene(
     path: &Path,
     strategies: &[Strategy],
-    frames: usize,
+    (frames, packets): (usize, PacketOptions),
     cost: &CostModel,
     pb: &indicatif::ProgressBar,
 ) -> anyhow::Result<Vec<DynamicRow>> {
@@ -270,7 +268,7 @@ fn bench_scene(
             let built = match strategy {
                 Strategy::Grid(kind) | Strategy::GridPackets(kind) => Built::Grid(
                     structure::build(tris, &GridConfig { kind, cost: *cost, ..GridConfig::default() })?.0,
-                    matches!(strategy, Strategy::GridPackets(_)),
+                    matches!(strategy, Strategy::GridPackets(_)).then_some(packets),
                 ),
                 #[cfg(feature = "peers")]
                 Strategy::Rebuild(p) => Built::Peer(super::peers::build(p, tris)),
