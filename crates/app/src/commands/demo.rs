@@ -55,7 +55,8 @@ pub fn run() -> anyhow::Result<()> {
     // Spot check against the reference.
     let sample = &sets[1].1[..2000];
     let (grid_hits, _) = trace_batch(sample, true, |r| trace_flat(&grid, &tris, r, TraceOptions::default()));
-    let (ref_hits, _) = trace_batch(sample, true, |r| brute::trace(&tris, r));
+    let brute = brute::BruteForce::new(&tris);
+    let (ref_hits, _) = trace_batch(sample, true, |r| brute.trace(r));
     let same = grid_hits.iter().zip(&ref_hits).filter(|(a, b)| a.same_bits(b)).count();
     println!("\nbrute-force check: {same} of {} sampled rays identical", sample.len());
     anyhow::ensure!(same == sample.len(), "grid and brute force disagree");

@@ -21,7 +21,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     let (label, build_ms, memory, hits, stats, secs) = match args.backend {
         Backend::Brute => {
             let start = Instant::now();
-            let (hits, stats) = trace_batch(&rays, true, |r| brute::trace(&tris, r));
+            let brute = brute::BruteForce::new(&tris);
+            let (hits, stats) = trace_batch(&rays, true, |r| brute.trace(r));
             ("brute force".to_string(), 0.0, 0, hits, stats, start.elapsed().as_secs_f64())
         }
         Backend::Gpu => {

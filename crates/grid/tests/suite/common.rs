@@ -51,7 +51,8 @@ pub fn mixed_rays(mesh: &Mesh, inside: &[Vec3], count: usize, seed: u64) -> Vec<
 
 /// Brute-force reference hits (all threads).
 pub fn reference(tris: &[[Vec3; 3]], rays: &[Ray]) -> (Vec<Hit>, BatchStats) {
-    trace_batch(rays, true, |r| brute::trace(tris, r))
+    let brute = brute::BruteForce::new(tris);
+    trace_batch(rays, true, |r| brute.trace(r))
 }
 
 /// Asserts bit-exact equality of two hit lists, naming the first differences.
