@@ -271,12 +271,6 @@ impl BoxCounter {
         let e = h - l + glam::UVec3::ONE;
         e.x as u64 * e.y as u64 * e.z as u64
     }
-
-    /// Whether the box is narrower than one cell (minus the margins) on every axis.
-    #[inline]
-    fn is_small(&self, lo: Vec3, hi: Vec3) -> bool {
-        (((hi - lo) * self.inv).max_element() as f64) + 2.0 * INSERT_MARGIN_CELLS < 1.0
-    }
 }
 
 /// Whether triangle `i` is in the 1-in-`stride` sample: a multiplicative hash of the index, so
@@ -287,13 +281,52 @@ fn sampled(i: usize, stride: usize) -> bool {
     ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32).is_multiple_of(stride as u64)
 }
 
+/// Strata of the sampled triangles by their widest extent at the coarsest resolution, in cells
+/// with the margins: narrower than one cell ("small"), than four ("medium"); wider ones are
+/// always counted exactly.
+const STRATUM_WIDTH: [f32; 2] = [1.0, 4.0];
+const STRATA: usize = STRATUM_WIDTH.len();
+
+/// Partial sums of one pass of [`count_refs_curve`].
+struct Tally {
+    /// Counts of the large triangles at each resolution.
+    large: Vec<u64>,
+    /// Counts of each stratum's counted triangles at each resolution.
+    sampled: [Vec<u64>; STRATA],
+    /// Triangles in each stratum, and how many of them were counted.
+    members: [u64; STRATA],
+    counted: [u64; STRATA],
+}
+
+impl Tally {
+    fn new(k: usize) -> Tally {
+        Tally {
+            large: vec![0; k],
+            sampled: std::array::from_fn(|_| vec![0; k]),
+            members: [0; STRATA],
+            counted: [0; STRATA],
+        }
+    }
+
+    fn merge(mut self, o: Tally) -> Tally {
+        let add = |a: &mut Vec<u64>, b: &[u64]| a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+        add(&mut self.large, &o.large);
+        for s in 0..STRATA {
+            add(&mut self.sampled[s], &o.sampled[s]);
+            self.members[s] += o.members[s];
+            self.counted[s] += o.counted[s];
+        }
+        self
+    }
+}
+
 /// N_m at each of `resolutions` (increasing) for insertion `mode`, in one pass over the
 /// triangles. Up to [`EXACT_COUNT_LIMIT`] triangles every count is exact. Above it, a triangle
-/// narrower than a cell at the coarsest resolution ("small") is counted at the finer ones only
-/// if it falls in a hashed 1-in-k sample, and the sample's mean stands in for the rest;
-/// every other ("large") triangle is always counted exactly, so the few big triangles that
-/// dominate N_m in architectural scenes never depend on the sample. The coarsest resolution's
-/// count is always exact. Returns the counts and how many triangles were counted at every m.
+/// narrower than a cell at the coarsest resolution ("small") is counted only if it falls in a
+/// hashed 1-in-k sample, and the sample's mean stands in for the rest (the others cost a
+/// bounding box and a comparison); every other ("large") triangle is always counted exactly, so
+/// the few big triangles that dominate N_m in architectural scenes never depend on the sample.
+/// Returns the counts and how many triangles were counted.
 ///
 /// Bounding-box counts come from the box alone; exact insertion runs the overlap test per
 /// candidate cell (the same as the build), so for it the sample is what keeps guess-and-check
@@ -318,65 +351,73 @@ pub fn count_refs_curve(
     }
     let min = grids[0].min;
     let stride = tris.len().div_ceil(EXACT_COUNT_LIMIT).max(1);
-    // Per chunk: [exact counts of large and sampled small triangles ×k, small total, small
-    // sampled, large count at the first resolution].
-    let chunk = |base: usize, part: &[[Vec3; 3]]| {
-        let mut large = vec![0u64; k];
-        let mut small = vec![0u64; k];
-        let (mut n_small, mut n_sampled) = (0u64, 0u64);
-        for (j, t) in part.iter().enumerate() {
-            let lo = t[0].min(t[1]).min(t[2]) - min;
-            let hi = t[0].max(t[1]).max(t[2]) - min;
-            let c0 = count(0, t, lo, hi);
-            if stride > 1 && geoms[0].is_small(lo, hi) {
-                n_small += 1;
-                small[0] += c0;
-                if sampled(base + j, stride) {
-                    n_sampled += 1;
-                    for (i, s) in small.iter_mut().enumerate().skip(1) {
-                        *s += count(i, t, lo, hi);
+    // The stratum of the box `[lo, hi]`: small, medium, or `None` for large (always exact).
+    let stratum = |lo: Vec3, hi: Vec3| {
+        if stride == 1 {
+            return None;
+        }
+        let e = ((hi - lo) * geoms[0].inv).max_element() + 2.0 * INSERT_MARGIN_CELLS as f32;
+        STRATUM_WIDTH.iter().position(|&w| e < w)
+    };
+    // `exact[s]`: stratum s is counted exactly (all of it) rather than sampled; `large`: the
+    // large triangles are counted.
+    let tally = |exact: [bool; STRATA], large: bool, base: usize, part: &[[Vec3; 3]]| {
+        let mut t = Tally::new(k);
+        for (j, tri) in part.iter().enumerate() {
+            let lo = tri[0].min(tri[1]).min(tri[2]) - min;
+            let hi = tri[0].max(tri[1]).max(tri[2]) - min;
+            let (sum, n) = match stratum(lo, hi) {
+                None if !large => continue,
+                None => (&mut t.large, None),
+                Some(s) => {
+                    t.members[s] += 1;
+                    if !exact[s] && !sampled(base + j, stride) {
+                        continue;
                     }
+                    (&mut t.sampled[s], Some(s))
                 }
-            } else {
-                large[0] += c0;
-                for (i, s) in large.iter_mut().enumerate().skip(1) {
-                    *s += count(i, t, lo, hi);
-                }
+            };
+            for (i, c) in sum.iter_mut().enumerate() {
+                *c += count(i, tri, lo, hi);
+            }
+            if let Some(s) = n {
+                t.counted[s] += 1;
             }
         }
-        (large, small, n_small, n_sampled)
+        t
     };
-    const CHUNK: usize = 8192;
-    let merge = |a: (Vec<u64>, Vec<u64>, u64, u64), b: (Vec<u64>, Vec<u64>, u64, u64)| {
-        let add = |x: Vec<u64>, y: Vec<u64>| x.iter().zip(&y).map(|(p, q)| p + q).collect::<Vec<u64>>();
-        (add(a.0, b.0), add(a.1, b.1), a.2 + b.2, a.3 + b.3)
-    };
-    let zero = || (vec![0u64; k], vec![0u64; k], 0u64, 0u64);
-    #[cfg(feature = "parallel")]
-    let (large, small, n_small, n_sampled) = if parallel {
-        use rayon::prelude::*;
-        tris.par_chunks(CHUNK).enumerate().map(|(i, p)| chunk(i * CHUNK, p)).reduce(zero, merge)
-    } else {
-        tris.chunks(CHUNK).enumerate().map(|(i, p)| chunk(i * CHUNK, p)).fold(zero(), merge)
-    };
-    #[cfg(not(feature = "parallel"))]
-    let (large, small, n_small, n_sampled) = {
+    let run = |exact: [bool; STRATA], large: bool| -> Tally {
+        const CHUNK: usize = 8192;
+        let each = |(i, p): (usize, &[[Vec3; 3]])| tally(exact, large, i * CHUNK, p);
+        #[cfg(feature = "parallel")]
+        if parallel {
+            use rayon::prelude::*;
+            return tris.par_chunks(CHUNK).enumerate().map(each).reduce(|| Tally::new(k), Tally::merge);
+        }
         let _ = parallel;
-        tris.chunks(CHUNK).enumerate().map(|(i, p)| chunk(i * CHUNK, p)).fold(zero(), merge)
+        tris.chunks(CHUNK).enumerate().map(each).fold(Tally::new(k), Tally::merge)
     };
+    let mut t = run([false; STRATA], true);
+    // A stratum with members but none in the sample (a few triangles of a rare size) is counted
+    // exactly in a second pass that skips the others.
+    let thin = std::array::from_fn(|s| t.counted[s] == 0 && t.members[s] > 0);
+    if thin.contains(&true) {
+        let again = run(thin, false);
+        for s in (0..STRATA).filter(|&s| thin[s]) {
+            t.sampled[s] = again.sampled[s].clone();
+            t.counted[s] = again.counted[s];
+        }
+    }
     let counts = (0..k)
         .map(|i| {
-            if i == 0 {
-                large[0] + small[0]
-            } else if n_sampled == 0 {
-                // No small triangle fell in the sample (so there are few): each covers ≥ 1 cell.
-                large[i] + n_small
-            } else {
-                large[i] + (small[i] as f64 * n_small as f64 / n_sampled as f64).round() as u64
-            }
+            let estimate: f64 = (0..STRATA)
+                .filter(|&s| t.counted[s] > 0)
+                .map(|s| t.sampled[s][i] as f64 * t.members[s] as f64 / t.counted[s] as f64)
+                .sum();
+            t.large[i] + estimate.round() as u64
         })
         .collect();
-    let counted = (tris.len() as u64 - n_small + n_sampled) as usize;
+    let counted = (tris.len() as u64 - t.members.iter().sum::<u64>() + t.counted.iter().sum::<u64>()) as usize;
     (counts, counted)
 }
 

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use super::{PhaseTimes, check_refs, zeroed_par};
 use crate::BuildError;
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
-use crate::insert::{InsertMode, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
+use crate::insert::{InsertMode, box_cell_range, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
 
 /// In-place inclusive prefix sum of `counts` in two parallel passes (chunk sums, then each
 /// chunk's running sum from its offset); returns the total.
@@ -110,13 +110,8 @@ pub fn bucket(
     // before its cells are visited one by one (a fine grid over long slivers would otherwise
     // take minutes to fail).
     let (boxes, upper): (Vec<[UVec3; 2]>, u64) = times.record("bin", || {
-        let boxes: Vec<[UVec3; 2]> = tris
-            .par_iter()
-            .map(|t| {
-                let g = prepare(&geom, t, INSERT_MARGIN_CELLS);
-                [g.lo, g.hi]
-            })
-            .collect();
+        let boxes: Vec<[UVec3; 2]> =
+            tris.par_iter().map(|t| box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32)).collect();
         let upper = boxes
             .par_iter()
             .map(|[lo, hi]| {
