@@ -322,11 +322,12 @@ impl Tally {
 
 /// N_m at each of `resolutions` (increasing) for insertion `mode`, in one pass over the
 /// triangles. Up to [`EXACT_COUNT_LIMIT`] triangles every count is exact. Above it, a triangle
-/// narrower than a cell at the coarsest resolution ("small") is counted only if it falls in a
-/// hashed 1-in-k sample, and the sample's mean stands in for the rest (the others cost a
-/// bounding box and a comparison); every other ("large") triangle is always counted exactly, so
-/// the few big triangles that dominate N_m in architectural scenes never depend on the sample.
-/// Returns the counts and how many triangles were counted.
+/// narrower than one or four cells at the coarsest resolution (the "small" and "medium"
+/// strata, [`STRATUM_WIDTH`]) is counted only if it falls in a hashed 1-in-k sample, and each
+/// stratum's sample mean stands in for the rest of it (the others cost a bounding box and a
+/// comparison); every wider ("large") triangle is always counted exactly, so the few big
+/// triangles that dominate N_m in architectural scenes never depend on the sample. Returns the
+/// counts and how many triangles were counted.
 ///
 /// Bounding-box counts come from the box alone; exact insertion runs the overlap test per
 /// candidate cell (the same as the build), so for it the sample is what keeps guess-and-check
