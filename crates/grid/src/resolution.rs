@@ -323,7 +323,7 @@ impl Tally {
 /// N_m at each of `resolutions` (increasing) for insertion `mode`, in one pass over the
 /// triangles. Up to [`EXACT_COUNT_LIMIT`] triangles every count is exact. Above it, a triangle
 /// narrower than one or four cells at the coarsest resolution (the "small" and "medium"
-/// strata, [`STRATUM_WIDTH`]) is counted only if it falls in a hashed 1-in-k sample, and each
+/// strata) is counted only if it falls in a hashed 1-in-k sample, and each
 /// stratum's sample mean stands in for the rest of it (the others cost a bounding box and a
 /// comparison); every wider ("large") triangle is always counted exactly, so the few big
 /// triangles that dominate N_m in architectural scenes never depend on the sample. Returns the
