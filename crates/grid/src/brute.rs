@@ -12,7 +12,7 @@ use gridrt_scene::{Hit, Ray};
 
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
-use crate::triangle::{certainly_outside, closer, intersect};
+use crate::triangle::{certainly_outside, closer, intersect, shear};
 
 /// Closest hit of `ray` among `tris` (t, then index), with stats (every triangle is a test).
 pub fn trace(tris: &[[Vec3; 3]], ray: &Ray) -> (Hit, RayStats) {
@@ -75,7 +75,6 @@ impl<'a> BruteForce<'a> {
 #[multiversion::multiversion(targets("x86_64+avx2+fma", "x86_64+avx"))]
 fn trace_chunks(b: &BruteForce, r: &PreparedRay) -> Hit {
     let mut best = Hit::MISS;
-    let [ox, oy, oz] = r.org_k;
     let n = b.tris.len();
     // The corners' coordinates at the ray's permutation: corner v's (x, y, z) are arrays
     // 3v..3v + 3.
@@ -87,8 +86,8 @@ fn trace_chunks(b: &BruteForce, r: &PreparedRay) -> Hit {
         let mut keep = 0u32;
         for l in 0..LANES {
             let sheared = |x: f32, y: f32, z: f32| {
-                let z = z - oz;
-                [(x - ox) - r.sx * z, (y - oy) - r.sy * z]
+                let [x, y, _] = shear([x, y, z], r.org_k, [r.sx, r.sy]);
+                [x, y]
             };
             let outside = certainly_outside(
                 sheared(x0[l], y0[l], z0[l]),

@@ -36,6 +36,16 @@ pub struct TriHit {
     pub v: f32,
 }
 
+/// A corner `c` (at the ray's axis permutation) in the watertight test's ray space: translated
+/// by the origin `o` (same permutation) and sheared by `s` (x, y; z is not yet scaled). The one
+/// place these operations are written: the batched pre-filters (packets, brute force) call it
+/// too, so their values are bit for bit those of [`intersect`].
+#[inline(always)]
+pub fn shear(c: [f32; 3], o: [f32; 3], s: [f32; 2]) -> [f32; 3] {
+    let z = c[2] - o[2];
+    [(c[0] - o[0]) - s[0] * z, (c[1] - o[1]) - s[1] * z, z]
+}
+
 /// Watertight intersection of `r` with triangle `tri`; `None` on a miss.
 #[inline]
 pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
@@ -45,13 +55,10 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     let p: &[f32; 9] = bytemuck::cast_ref(tri);
     let (kx, ky, kz) = (r.kx, r.ky, r.kz);
     let [ox, oy, oz] = r.org_k;
-    let sheared = |v: usize| {
-        let z = p[3 * v + kz] - oz;
-        ((p[3 * v + kx] - ox) - r.sx * z, (p[3 * v + ky] - oy) - r.sy * z, z)
-    };
-    let (ax, ay, az) = sheared(0);
-    let (bx, by, bz) = sheared(1);
-    let (cx, cy, cz) = sheared(2);
+    let sheared = |v: usize| shear([p[3 * v + kx], p[3 * v + ky], p[3 * v + kz]], [ox, oy, oz], [r.sx, r.sy]);
+    let [ax, ay, az] = sheared(0);
+    let [bx, by, bz] = sheared(1);
+    let [cx, cy, cz] = sheared(2);
     // Most triangles a ray is tested against are misses the f32 edge functions already
     // decide; the exact f64 signs are needed only for the rest.
     if certainly_outside([ax, ay], [bx, by], [cx, cy]) {

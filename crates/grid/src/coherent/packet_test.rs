@@ -14,7 +14,7 @@ use gridrt_scene::Hit;
 
 use super::frustum::Lane;
 use crate::ray::PreparedRay;
-use crate::triangle::{certainly_outside, closer, intersect};
+use crate::triangle::{certainly_outside, closer, intersect, shear};
 
 /// Rays per SIMD chunk.
 pub const LANES: usize = 8;
@@ -165,8 +165,8 @@ fn certainly_outside8(corners: &[[f32; 3]; 3], o: &[Lanes; 3], s: &[Lanes; 2]) -
     let mut mask = 0u32;
     for l in 0..LANES {
         let sheared = |c: &[f32; 3]| {
-            let z = c[2] - o[2][l];
-            [(c[0] - o[0][l]) - s[0][l] * z, (c[1] - o[1][l]) - s[1][l] * z]
+            let [x, y, _] = shear(*c, [o[0][l], o[1][l], o[2][l]], [s[0][l], s[1][l]]);
+            [x, y]
         };
         let outside = certainly_outside(sheared(&corners[0]), sheared(&corners[1]), sheared(&corners[2]));
         mask |= u32::from(outside) << l;
