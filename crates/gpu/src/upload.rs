@@ -58,7 +58,7 @@ pub struct GpuStructure {
     /// filled per dispatch.
     pub params: GridParams,
     pub refs: wgpu::Buffer,
-    /// `cell_start` (flat, macrocell, proximity) or the hierarchy's `cells`.
+    /// The table of M + 1 offsets (flat, macrocell, proximity: [`gridrt_grid::FlatGrid::cell_table`]) or the hierarchy's `cells`.
     pub cells: wgpu::Buffer,
     /// Occupancy bits (macrocell), nodes (hierarchies), packed distances (proximity).
     pub extra: Option<wgpu::Buffer>,
@@ -75,20 +75,24 @@ impl GpuStructure {
             ..GridParams::default()
         };
         let none = wgpu::BufferUsages::empty();
+        // The flat grids' kernels read the table of M + 1 offsets (the CPU keeps only the
+        // occupied cells' offsets).
+        let table: Vec<u32>;
         let (refs, cells, extra): (&[u32], &[u8], Option<Vec<u8>>) = match grid {
-            AnyGrid::Flat(f) => (&f.refs, bytemuck::cast_slice(&f.cell_start), None),
+            AnyGrid::Flat(f) => {
+                table = f.cell_table();
+                (&f.refs, bytemuck::cast_slice(&table), None)
+            }
             AnyGrid::Macrocell(m) => {
                 params.macro_edge = m.a;
-                (
-                    &m.fine.refs,
-                    bytemuck::cast_slice(&m.fine.cell_start),
-                    Some(bytemuck::cast_slice(&m.occupancy).to_vec()),
-                )
+                table = m.fine.cell_table();
+                (&m.fine.refs, bytemuck::cast_slice(&table), Some(bytemuck::cast_slice(&m.occupancy).to_vec()))
             }
             AnyGrid::Proximity(p) => {
                 let mut packed = p.distance.clone();
                 packed.resize(packed.len().div_ceil(4) * 4, 0);
-                (&p.grid.refs, bytemuck::cast_slice(&p.grid.cell_start), Some(packed))
+                table = p.grid.cell_table();
+                (&p.grid.refs, bytemuck::cast_slice(&table), Some(packed))
             }
             AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => {
                 let nodes: Vec<GpuNode> =

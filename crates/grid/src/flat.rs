@@ -1,5 +1,8 @@
-//! The flat uniform grid in the compact layout of Lagae & Dutré (2008): `cell_start` (M + 1
-//! offsets) and `refs` (triangle indices), cell `c` owning `refs[cell_start[c]..cell_start[c+1]]`.
+//! The flat uniform grid in the compact layout of Lagae & Dutré (2008) — triangle indices in
+//! cell order (`refs`) and where each cell's run starts — with the offsets of empty cells
+//! dropped: an occupancy bit per cell, and per 32 cells the rank that finds an occupied cell's
+//! offset (`ref_start`). Most cells of a grid are empty, so a grid costs about a quarter of a
+//! byte per cell, plus four bytes per occupied cell and per reference.
 //!
 //! Built sort-last in linear time by [`crate::build::bucket`] (serial) or
 //! [`crate::build::parallel`] (bit-identical): references in a cell are in increasing triangle
@@ -14,44 +17,119 @@ use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use crate::stats::StructureStats;
 use crate::trace::closest_hit::ClosestHit;
 
+/// 32 cells' occupancy (x fastest) and how many occupied cells precede them: the rank that
+/// turns a cell index into its entry of [`FlatGrid::ref_start`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[repr(C)]
+pub struct OccupancyWord {
+    /// Bit j: cell 32k + j holds references.
+    pub bits: u32,
+    /// Occupied cells in words 0 … k − 1.
+    pub rank: u32,
+}
+
+/// Cells per [`OccupancyWord`].
+pub const WORD_CELLS: usize = 32;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FlatGrid {
     pub geom: GridGeometry,
-    pub cell_start: Vec<u32>,
+    /// Per 32 cells, which hold references and the rank of the first (the survey's macrocell
+    /// flags at cell granularity): a walk passes empty cells by a bit test, and an empty cell
+    /// costs a quarter of a byte, not an offset (most cells of a grid are empty).
+    pub occupied: Vec<OccupancyWord>,
+    /// Per occupied cell, in cell order, the start of its references in `refs`; one more entry
+    /// holds `refs.len()`.
+    pub ref_start: Vec<u32>,
     pub refs: Vec<u32>,
-    /// One bit per cell (x fastest, 64 cells a word), set when the cell holds references: a
-    /// walk passes empty cells without touching `cell_start` (the survey's macrocell flags at
-    /// cell granularity; most cells of a grid are empty, and the bits fit in cache).
-    pub occupied: Vec<u64>,
 }
 
 impl FlatGrid {
-    /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]`.
+    /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]` (the
+    /// builds' table of M + 1 offsets), stored compactly: the empty cells' offsets are dropped.
     pub fn new(geom: GridGeometry, cell_start: Vec<u32>, refs: Vec<u32>) -> FlatGrid {
         let cells = cell_start.len().saturating_sub(1);
-        // Word k holds cells 64k … 64k + 63: 65 offsets, compared pairwise.
-        let word = |k: usize| {
-            let s = &cell_start[64 * k..(64 * k + 65).min(cells + 1)];
-            s.windows(2).enumerate().fold(0u64, |w, (j, p)| w | (((p[1] > p[0]) as u64) << j))
+        // Word k holds cells 32k … 32k + 31: 33 offsets, compared pairwise.
+        let bits = |k: usize| {
+            let s = &cell_start[WORD_CELLS * k..(WORD_CELLS * k + WORD_CELLS + 1).min(cells + 1)];
+            s.windows(2).enumerate().fold(0u32, |w, (j, p)| w | (((p[1] > p[0]) as u32) << j))
         };
+        let words = cells.div_ceil(WORD_CELLS);
+        // The starts of the occupied cells of words `first..`, in order, written to `out`.
+        let gather = |first: usize, ws: &[OccupancyWord], out: &mut [u32]| {
+            let mut o = 0;
+            for (k, w) in ws.iter().enumerate() {
+                let mut b = w.bits;
+                while b != 0 {
+                    out[o] = cell_start[WORD_CELLS * (first + k) + b.trailing_zeros() as usize];
+                    o += 1;
+                    b &= b - 1;
+                }
+            }
+        };
+        // Words per parallel chunk (128k cells).
+        const CHUNK: usize = 4096;
         #[cfg(feature = "parallel")]
-        let occupied = {
+        let mut occupied: Vec<OccupancyWord> = {
             use rayon::prelude::*;
-            (0..cells.div_ceil(64)).into_par_iter().map(word).collect()
+            (0..words).into_par_iter().map(|k| OccupancyWord { bits: bits(k), rank: 0 }).collect()
         };
         #[cfg(not(feature = "parallel"))]
-        let occupied = (0..cells.div_ceil(64)).map(word).collect();
-        FlatGrid { geom, cell_start, refs, occupied }
+        let mut occupied: Vec<OccupancyWord> = (0..words).map(|k| OccupancyWord { bits: bits(k), rank: 0 }).collect();
+        let mut rank = 0u32;
+        for w in &mut occupied {
+            w.rank = rank;
+            rank += w.bits.count_ones();
+        }
+        let mut ref_start = vec![0u32; rank as usize + 1];
+        ref_start[rank as usize] = refs.len() as u32;
+        // Chunk c's occupied cells go to ref_start[rank of its first word ..].
+        let chunk_rank = |c: usize| occupied.get(c * CHUNK).map_or(rank, |w| w.rank) as usize;
+        let mut parts = Vec::with_capacity(words.div_ceil(CHUNK));
+        let mut rest = &mut ref_start[..rank as usize];
+        for c in 0..words.div_ceil(CHUNK) {
+            let (part, tail) = std::mem::take(&mut rest).split_at_mut(chunk_rank(c + 1) - chunk_rank(c));
+            parts.push((c, part));
+            rest = tail;
+        }
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            parts
+                .into_par_iter()
+                .for_each(|(c, part)| gather(c * CHUNK, &occupied[c * CHUNK..((c + 1) * CHUNK).min(words)], part));
+        }
+        #[cfg(not(feature = "parallel"))]
+        for (c, part) in parts {
+            gather(c * CHUNK, &occupied[c * CHUNK..((c + 1) * CHUNK).min(words)], part);
+        }
+        FlatGrid { geom, occupied, ref_start, refs }
+    }
+
+    /// The table of M + 1 offsets the builds produce (cell `c` owns
+    /// `refs[t[c]..t[c + 1]]`): what the GPU kernels read, and what `new` compacts.
+    pub fn cell_table(&self) -> Vec<u32> {
+        let cells = self.geom.cell_count() as usize;
+        let mut t = Vec::with_capacity(cells + 1);
+        let mut j = 0usize;
+        for c in 0..cells {
+            // An empty cell starts (and ends) where the next occupied cell starts.
+            t.push(self.ref_start[j]);
+            if self.is_occupied(c) {
+                j += 1;
+            }
+        }
+        t.push(self.refs.len() as u32);
+        t
     }
 
     /// Whether cell `index` holds references.
     #[inline]
     pub fn is_occupied(&self, index: usize) -> bool {
-        (self.occupied[index / 64] >> (index % 64)) & 1 != 0
+        (self.occupied[index / WORD_CELLS].bits >> (index % WORD_CELLS)) & 1 != 0
     }
 
-    /// Triangle indices in cell `index`; an empty cell costs a bit test, not a `cell_start`
-    /// load.
+    /// Triangle indices in cell `index`; an empty cell costs a bit test.
     #[inline]
     pub fn cell(&self, index: usize) -> &[u32] {
         if !self.is_occupied(index) {
@@ -60,10 +138,15 @@ impl FlatGrid {
         self.refs_of(index)
     }
 
-    /// The references of cell `index`, read from `cell_start` (no occupancy check).
+    /// The references of cell `index`, which must be occupied: its rank among the occupied
+    /// cells (the word's rank plus the occupied cells before it in the word) indexes
+    /// `ref_start`.
     #[inline]
     pub(crate) fn refs_of(&self, index: usize) -> &[u32] {
-        &self.refs[self.cell_start[index] as usize..self.cell_start[index + 1] as usize]
+        let w = self.occupied[index / WORD_CELLS];
+        let below = (1u32 << (index % WORD_CELLS)) - 1;
+        let j = (w.rank + (w.bits & below).count_ones()) as usize;
+        &self.refs[self.ref_start[j] as usize..self.ref_start[j + 1] as usize]
     }
 
     /// Whether the walk of `search` ends in cell `index`, which it leaves at `t_exit`: the
@@ -87,13 +170,13 @@ impl FlatGrid {
     }
 
     pub fn memory_bytes(&self) -> u64 {
-        (self.cell_start.len() + self.refs.len()) as u64 * 4 + self.occupied.len() as u64 * 8
+        (self.ref_start.len() + self.refs.len()) as u64 * 4 + (self.occupied.len() * size_of::<OccupancyWord>()) as u64
     }
 
     /// Size figures of the grid alone (one level).
     pub fn stats(&self, triangles: usize) -> StructureStats {
         let cells = self.geom.cell_count();
-        let occupied: u64 = self.occupied.iter().map(|w| w.count_ones() as u64).sum();
+        let occupied = self.ref_start.len() as u64 - 1;
         StructureStats {
             resolution: self.geom.res.to_array(),
             nodes: 1,

@@ -33,7 +33,7 @@ use thiserror::Error;
 
 pub use build::{BuildOptions, PhaseTimes, check_cells};
 pub use coherent::{PacketOptions, PacketStats};
-pub use flat::FlatGrid;
+pub use flat::{FlatGrid, OccupancyWord};
 pub use geometry::GridGeometry;
 pub use insert::InsertMode;
 pub use resolution::{CostModel, Resolution, ResolutionChoice};

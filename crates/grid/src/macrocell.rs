@@ -205,7 +205,7 @@ fn occupancy(fine: &FlatGrid, a: u32) -> (UVec3, Vec<u32>) {
             for x in 0..res.x {
                 let c = UVec3::new(x, y, z);
                 let i = fine.geom.cell_index(c);
-                if fine.cell_start[i + 1] > fine.cell_start[i] {
+                if fine.is_occupied(i) {
                     let m = c / a;
                     let k = linear_index(m, macro_res);
                     occupancy[k / 32] |= 1 << (k % 32);

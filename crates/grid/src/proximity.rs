@@ -9,7 +9,7 @@
 //! is exact for the chessboard metric.
 //!
 //! # Layout (GPU-ready)
-//! The flat grid (`cell_start`, `refs`) plus `distance`: one byte per cell (0 = occupied,
+//! The flat grid (`occupied`, `ref_start`, `refs`) plus `distance`: one byte per cell (0 = occupied,
 //! capped at 255), packed four to a u32 word for the GPU.
 
 use glam::{UVec3, Vec3};
@@ -95,7 +95,7 @@ fn exit_of_box(r: &GridRay, lo: UVec3, hi: UVec3) -> f32 {
 pub fn distance_transform(grid: &FlatGrid) -> Vec<u8> {
     let r = grid.geom.res.as_ivec3();
     let n = grid.geom.cell_count() as usize;
-    let mut d: Vec<u8> = (0..n).map(|i| if grid.cell_start[i + 1] > grid.cell_start[i] { 0 } else { 255 }).collect();
+    let mut d: Vec<u8> = (0..n).map(|i| if grid.is_occupied(i) { 0 } else { 255 }).collect();
     let idx = |x: i32, y: i32, z: i32| (x + r.x * (y + r.y * z)) as usize;
     // Neighbours that precede a cell in raster order (13 of the 26); the backward pass mirrors.
     let mut before = Vec::new();

@@ -78,8 +78,10 @@ impl CostModel {
     }
 
     /// T(m) for a grid with `cells` cells and `n_m` triangle–cell references over `triangles`
-    /// triangles, plus the memory term (the flat grid's bytes: an offset and an occupancy bit
-    /// per cell, an index per reference).
+    /// triangles, plus the memory term: 4.125 bytes per cell and 4 per reference, the flat
+    /// grid's bytes when every cell had an offset. The flat grid now stores offsets for its
+    /// occupied cells only (a quarter of a byte per empty cell), but the term stays as it was
+    /// calibrated: it stands for the walk's cache misses per cell, which the sweep measures.
     pub fn cost(&self, cells: u64, n_m: u64, triangles: usize) -> f64 {
         let m = (cells as f64).cbrt();
         let bytes = 4.125 * cells as f64 + 4.0 * n_m as f64;

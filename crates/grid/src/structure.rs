@@ -190,16 +190,26 @@ impl AnyGrid {
     }
 
     /// A 64-bit FNV-1a hash of the structure's arrays as the GPU reads them: the cell table
-    /// (`cell_start`, or a hierarchy's cells), then the references, then the kind's extra array
+    /// (a flat grid's table of M + 1 offsets, [`FlatGrid::cell_table`], or a hierarchy's cells), then the references, then the kind's extra array
     /// (macrocell occupancy, proximity distances), each as little-endian words. Two builds
     /// (serial or parallel, CPU or GPU) are identical exactly when the digests are, barring a
     /// hash collision.
     pub fn cells_digest(&self) -> u64 {
+        let table;
         let (cells, refs, extra_words, extra_bytes): (&[u32], &[u32], &[u32], &[u8]) = match self {
-            AnyGrid::Flat(g) => (&g.cell_start, &g.refs, &[], &[]),
-            AnyGrid::Macrocell(g) => (&g.fine.cell_start, &g.fine.refs, &g.occupancy, &[]),
+            AnyGrid::Flat(g) => {
+                table = g.cell_table();
+                (&table, &g.refs, &[], &[])
+            }
+            AnyGrid::Macrocell(g) => {
+                table = g.fine.cell_table();
+                (&table, &g.fine.refs, &g.occupancy, &[])
+            }
             AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => (&h.cells, &h.refs, &[], &[]),
-            AnyGrid::Proximity(p) => (&p.grid.cell_start, &p.grid.refs, &[], &p.distance),
+            AnyGrid::Proximity(p) => {
+                table = p.grid.cell_table();
+                (&table, &p.grid.refs, &[], &p.distance)
+            }
         };
         let mut h = 0xcbf2_9ce4_8422_2325u64;
         let mut eat = |b: u8| h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);

@@ -18,11 +18,24 @@ fn layout_is_consistent_and_sorted() {
         let (g, _, _) =
             build_flat(&tris, Resolution::Cubic(17), &CostModel::default(), BuildOptions { insert, parallel: true })
                 .unwrap();
-        assert_eq!(g.cell_start.len() as u64, g.geom.cell_count() + 1);
-        assert_eq!(*g.cell_start.last().unwrap() as usize, g.refs.len());
-        assert!(g.cell_start.windows(2).all(|w| w[0] <= w[1]));
+        let table = g.cell_table();
+        assert_eq!(table.len() as u64, g.geom.cell_count() + 1);
+        assert_eq!(*table.last().unwrap() as usize, g.refs.len());
+        assert!(table.windows(2).all(|w| w[0] <= w[1]));
+        // The compact layout: an offset per occupied cell (each holds a reference), ranks that
+        // count the occupied cells before each word, and the table rebuilding the same grid.
+        assert!(g.ref_start.windows(2).all(|w| w[0] < w[1]), "an occupied cell without references");
+        let mut rank = 0;
+        for w in &g.occupied {
+            assert_eq!(w.rank, rank);
+            rank += w.bits.count_ones();
+        }
+        assert_eq!(rank as usize + 1, g.ref_start.len());
+        assert_eq!(FlatGrid::new(g.geom, table.clone(), g.refs.clone()), g);
         for c in 0..g.geom.cell_count() as usize {
             let refs = g.cell(c);
+            assert_eq!(refs, &g.refs[table[c] as usize..table[c + 1] as usize], "cell {c}");
+            assert_eq!(g.is_occupied(c), !refs.is_empty());
             assert!(refs.windows(2).all(|w| w[0] < w[1]), "cell {c} not strictly increasing");
         }
         // Every triangle is referenced at least once.
