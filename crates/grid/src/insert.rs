@@ -8,8 +8,9 @@
 //! sliver of non-zero area in the f32 shear of the watertight test, and the brute-force
 //! reference would then hit them, so skipping them would break bit-exact agreement.
 
-use glam::{DVec3, UVec3, Vec3};
+use glam::{DVec3, UVec3, Vec3, Vec3A};
 use serde::{Deserialize, Serialize};
+use wide::{f32x4, i32x4};
 
 use crate::geometry::GridGeometry;
 
@@ -57,17 +58,26 @@ pub fn prepare(geom: &GridGeometry, tri: &[Vec3; 3], margin: f64) -> GridTriangl
 /// about 2^-24 × 2 × 1024 cells) is far below the margin, so the range stays conservative.
 #[inline]
 pub fn box_cell_range(geom: &GridGeometry, tri: &[Vec3; 3], margin: f32) -> [UVec3; 2] {
-    let g = tri.map(|p| (p - geom.min) * geom.inv_cell);
-    grid_box_cells(g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]), geom.res, margin)
+    // Vec3A: the same IEEE operations per lane as Vec3, four lanes at a time.
+    let (min, inv) = (Vec3A::from(geom.min), Vec3A::from(geom.inv_cell));
+    let g = tri.map(|p| (Vec3A::from(p) - min) * inv);
+    grid_box_cells_a(g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]), geom.res, margin)
 }
 
 /// The cells within `margin` of the grid-space box `[lo, hi]`, clamped to `res`: on each axis
 /// the cell of `x − margin` and the cell of `x + margin`, from `x`'s floor and exact fraction.
 #[inline]
 pub fn grid_box_cells(lo: Vec3, hi: Vec3, res: UVec3, margin: f32) -> [UVec3; 2] {
+    grid_box_cells_a(lo.into(), hi.into(), res, margin)
+}
+
+/// [`grid_box_cells`] one axis at a time: the rule as the GPU build writes it, which the vector
+/// version below (every CPU build's) must equal bit for bit (a unit test compares them).
+#[cfg(test)]
+fn grid_box_cells_scalar(lo: Vec3A, hi: Vec3A, res: UVec3, margin: f32) -> [UVec3; 2] {
     let cell = |x: f32, n: u32, upper: bool| -> u32 {
-        // Clamped to [0, n] first, so truncation is floor and the fraction is exact.
-        let c = x.clamp(0.0, n as f32);
+        // Clamped to [0, n] first (NaN to 0), so truncation is floor and the fraction is exact.
+        let c = x.max(0.0).min(n as f32);
         let i = c as u32;
         let frac = c - i as f32;
         let i = if upper { i + (frac >= 1.0 - margin) as u32 } else { i - (frac < margin && i > 0) as u32 };
@@ -77,6 +87,33 @@ pub fn grid_box_cells(lo: Vec3, hi: Vec3, res: UVec3, margin: f32) -> [UVec3; 2]
         UVec3::new(cell(lo.x, res.x, false), cell(lo.y, res.y, false), cell(lo.z, res.z, false)),
         UVec3::new(cell(hi.x, res.x, true), cell(hi.y, res.y, true), cell(hi.z, res.z, true)),
     ]
+}
+
+/// [`grid_box_cells_scalar`] on the three axes at once (four lanes: SSE2 on x86-64): the
+/// binning and the guess-and-check compute a range per triangle, and the scalar rule's
+/// conversions and selects were a fifth of a flat build.
+#[inline]
+fn grid_box_cells_a(lo: Vec3A, hi: Vec3A, res: UVec3, margin: f32) -> [UVec3; 2] {
+    let n = i32x4::new([res.x as i32, res.y as i32, res.z as i32, 1]);
+    let (nf, last) = (n.round_float(), n - i32x4::splat(1));
+    let floor_frac = |x: Vec3A| {
+        // max(x, 0) gives 0 for NaN (its second operand), as f32::max does; then the values
+        // are in [0, n], where truncation is floor and the fraction is exact.
+        let c = f32x4::new(x.extend(0.0).to_array()).fast_max(f32x4::ZERO).fast_min(nf);
+        let i = c.fast_trunc_int();
+        (i, c - i.round_float())
+    };
+    // A true comparison is all ones (−1): adding it steps one cell down.
+    let mask = |m: f32x4| bytemuck::cast::<f32x4, i32x4>(m);
+    let (il, fl) = floor_frac(lo);
+    let down = mask(fl.simd_lt(f32x4::splat(margin))) & il.simd_gt(i32x4::ZERO);
+    let (ih, fh) = floor_frac(hi);
+    let up = mask(fh.simd_ge(f32x4::splat(1.0 - margin)));
+    let corner = |v: i32x4| {
+        let a = v.min(last).to_array();
+        UVec3::new(a[0] as u32, a[1] as u32, a[2] as u32)
+    };
+    [corner(il + down), corner(ih - up)]
 }
 
 /// Calls `f(cell_index)` for every cell `tri` is inserted into, in increasing index order
@@ -185,4 +222,47 @@ pub fn tri_box_overlap(tri: &[DVec3; 3], c: DVec3, h: f64) -> bool {
     let d = n.dot(v0);
     let r = h * (n.x.abs() + n.y.abs() + n.z.abs());
     d.abs() <= r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The vector cell range equals the scalar rule bit for bit: values on and near cell walls
+    /// (within and beyond the margin), outside the grid on both sides, at its far wall, huge,
+    /// infinite and NaN, on grids of 1 to 1024 cells an axis.
+    #[test]
+    fn vector_cell_range_equals_the_scalar_rule() {
+        let margin = crate::geometry::INSERT_MARGIN_CELLS as f32;
+        let mut xs = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -1e30, 1e30, -0.0, 0.0, -0.5, f32::MIN_POSITIVE];
+        for w in [0.0f32, 1.0, 2.0, 7.0, 16.0, 511.0, 1023.0, 1024.0, 1025.0] {
+            for d in [0.0, margin, margin * 0.5, margin * 2.0, 1e-7, 1e-4, 0.5] {
+                xs.extend([
+                    w + d,
+                    w - d,
+                    f32::from_bits((w + d).to_bits() + 1),
+                    f32::from_bits((w - d).to_bits().max(1) - 1),
+                ]);
+            }
+        }
+        // A deterministic spread of fractions.
+        let mut h = 0x9e37_79b9u32;
+        for _ in 0..2000 {
+            h ^= h << 13;
+            h ^= h >> 17;
+            h ^= h << 5;
+            xs.push((h % 2_200_000) as f32 / 2000.0 - 50.0);
+        }
+        for res in [UVec3::new(1, 3, 1024), UVec3::new(17, 1024, 2), UVec3::new(1024, 1, 64)] {
+            for (k, &x) in xs.iter().enumerate() {
+                let (y, z) = (xs[(k * 7 + 3) % xs.len()], xs[(k * 13 + 5) % xs.len()]);
+                let (lo, hi) = (Vec3A::new(x, y, z), Vec3A::new(z, x, y));
+                assert_eq!(
+                    grid_box_cells_a(lo, hi, res, margin),
+                    grid_box_cells_scalar(lo, hi, res, margin),
+                    "{lo:?} {hi:?} {res}"
+                );
+            }
+        }
+    }
 }

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::{PhaseTimes, check_refs, zeroed_par};
 use crate::BuildError;
-use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
+use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES};
 use crate::insert::{InsertMode, box_cell_range, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
 
 /// In-place inclusive prefix sum of `counts` in two parallel passes (chunk sums, then each
@@ -70,10 +70,35 @@ fn cells_of_triangle(
     }
 }
 
+/// A triangle's cell range, each corner's three indices in 10 bits of a word (every axis has at
+/// most [`MAX_AXIS_RES`] = 2^10 cells): a third of the bytes of two `UVec3`, so binning, counting
+/// and scattering move less memory.
+#[derive(Clone, Copy, Default)]
+struct CellBox([u32; 2]);
+
+const _: () = assert!(MAX_AXIS_RES <= 1 << 10);
+
+impl CellBox {
+    #[inline(always)]
+    fn pack([lo, hi]: [UVec3; 2]) -> CellBox {
+        let word = |v: UVec3| v.x | v.y << 10 | v.z << 20;
+        CellBox([word(lo), word(hi)])
+    }
+    #[inline(always)]
+    fn unpack(self) -> [UVec3; 2] {
+        let v = |w: u32| UVec3::new(w & 0x3ff, (w >> 10) & 0x3ff, w >> 20);
+        [v(self.0[0]), v(self.0[1])]
+    }
+    #[inline(always)]
+    fn z_range(self) -> (u32, u32) {
+        (self.0[0] >> 20, self.0[1] >> 20)
+    }
+}
+
 /// One chunk of triangles sorted by slab: slab `s` owns `items[start[s]..start[s + 1]]`, each a
 /// triangle index and its cell range, in increasing index order.
 struct SlabBins {
-    items: Vec<(u32, [UVec3; 2])>,
+    items: Vec<(u32, CellBox)>,
     start: Vec<u32>,
 }
 
@@ -109,13 +134,14 @@ pub fn bucket(
     // references from above (exactly, for box insertion): a grid far over the limit is refused
     // before its cells are visited one by one (a fine grid over long slivers would otherwise
     // take minutes to fail).
-    let (boxes, upper): (Vec<[UVec3; 2]>, u64) = times.record("bin", || {
-        let boxes: Vec<[UVec3; 2]> =
-            tris.par_iter().map(|t| box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32)).collect();
+    let (boxes, upper): (Vec<CellBox>, u64) = times.record("bin", || {
+        let boxes: Vec<CellBox> =
+            tris.par_iter().map(|t| CellBox::pack(box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32))).collect();
         let upper = boxes
             .par_iter()
-            .map(|[lo, hi]| {
-                let e = *hi - *lo + UVec3::ONE;
+            .map(|b| {
+                let [lo, hi] = b.unpack();
+                let e = hi - lo + UVec3::ONE;
                 e.x as u64 * e.y as u64 * e.z as u64
             })
             .sum();
@@ -134,7 +160,13 @@ pub fn bucket(
             .into_iter()
             .map(|n| (n, layout(n)))
             .find(|(_, (_, of))| {
-                let pairs: u64 = boxes.par_iter().map(|b| (of[b[1].z as usize] - of[b[0].z as usize]) as u64 + 1).sum();
+                let pairs: u64 = boxes
+                    .par_iter()
+                    .map(|b| {
+                        let (z0, z1) = b.z_range();
+                        (of[z1 as usize] - of[z0 as usize]) as u64 + 1
+                    })
+                    .sum();
                 pairs <= 4 * tris.len() as u64
             })
             .expect("one slab holds each triangle once");
@@ -142,8 +174,10 @@ pub fn bucket(
         // in sequence), in increasing order: each chunk of triangles sorts its own by slab (a
         // counting sort), and a slab reads its run of every chunk, chunks in order.
         const CHUNK: usize = 1 << 14;
-        let slab_range =
-            |b: &[UVec3; 2]| slab_of_layer[b[0].z as usize] as usize..=slab_of_layer[b[1].z as usize] as usize;
+        let slab_range = |b: &CellBox| {
+            let (z0, z1) = b.z_range();
+            slab_of_layer[z0 as usize] as usize..=slab_of_layer[z1 as usize] as usize
+        };
         let bins: Vec<SlabBins> = boxes
             .par_chunks(CHUNK)
             .enumerate()
@@ -158,7 +192,7 @@ pub fn bucket(
                     start[s + 1] += start[s];
                 }
                 let mut next = start.clone();
-                let mut items = vec![(0u32, [UVec3::ZERO; 2]); start[slabs] as usize];
+                let mut items = vec![(0u32, CellBox::default()); start[slabs] as usize];
                 for (j, b) in part.iter().enumerate() {
                     for s in slab_range(b) {
                         items[next[s] as usize] = ((k * CHUNK + j) as u32, *b);
@@ -186,7 +220,7 @@ pub fn bucket(
                 let base = edge[s] as usize * layer;
                 for (i, b) in in_slab(s) {
                     let layers = edge[s]..edge[s + 1];
-                    cells_of_triangle(&geom, &tris[i as usize], b, mode, layers, |c| part[c - base] += 1);
+                    cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers, |c| part[c - base] += 1);
                 }
             },
         )
@@ -210,7 +244,7 @@ pub fn bucket(
             // Backwards, so that each cell, filled from its end, holds increasing indices.
             for (i, b) in in_slab(s).rev() {
                 let layers = edge[s]..edge[s + 1];
-                cells_of_triangle(&geom, &tris[i as usize], b, mode, layers, |c| {
+                cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers, |c| {
                     let e = &mut end[c - base];
                     *e -= 1;
                     out[(*e - ref_base) as usize] = i;
