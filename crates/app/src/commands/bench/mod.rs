@@ -182,6 +182,10 @@ struct Measured {
     hits: Vec<Vec<Hit>>,
 }
 
+/// Build rounds per scene at least (`--repeat` when larger): builds are cheap next to the
+/// traces, and their ratios need more rounds than the traces' to settle.
+const BUILD_ROUNDS: usize = 5;
+
 /// Measures every subject on one scene, on every ray set; the grids that walk packets also in
 /// `--tile` packets on the camera sets (a row of their own, family "grid packets").
 fn bench_scene(
@@ -195,10 +199,25 @@ fn bench_scene(
     let gpu = session(gpu, sc)?;
     let mut reference: Option<Vec<Vec<Hit>>> = None;
     let mut rows = Vec::new();
-    for subject in Subject::all(!args.no_peers) {
+    // Builds are timed interleaved, every subject once a round, and each keeps its best round:
+    // the build targets are ratios between subjects, and this machine's speed drifts from one
+    // second to the next (subject by subject, two builds each, the same scene's ratios moved 2×
+    // between runs).
+    let subjects = Subject::all(!args.no_peers);
+    let mut builds: Vec<(f64, Option<anyhow::Result<Built>>)> = subjects.iter().map(|_| (f64::INFINITY, None)).collect();
+    for _ in 0..(args.repeat as usize).max(BUILD_ROUNDS) {
+        for (&subject, (best, built)) in subjects.iter().zip(&mut builds) {
+            pb.set_message(format!("{} · {} (build)", sc.name, subject.name()));
+            // The previous round's structure is dropped first, outside the timing.
+            *built = None;
+            let (s, b) = best_of(1, || build(subject, &sc.tris, cost));
+            *best = best.min(s);
+            *built = Some(b);
+        }
+    }
+    for (subject, (build_s, built)) in subjects.into_iter().zip(builds) {
         pb.set_message(format!("{} · {}", sc.name, subject.name()));
-        let (build_s, built) = best_of(args.repeat as usize, || build(subject, &sc.tris, cost));
-        let built = built?;
+        let built = built.expect("at least one build round")?;
         let memory = built.memory_bytes();
         let mut single = Measured {
             structure: subject.name(),
