@@ -7,7 +7,8 @@
 //! without rounding.
 //!
 //! # Layout (GPU-ready: flat arrays, indices only)
-//! - the fine grid: `cell_start` (M + 1 u32) and `refs` (u32), as [`FlatGrid`];
+//! - the fine grid, a [`FlatGrid`] (occupancy words, an offset per occupied cell, `refs`; the
+//!   GPU reads its M + 1 table, [`FlatGrid::cell_table`]);
 //! - `occupancy`: one u32 word per 32 macrocells, bit `i % 32` of word `i / 32` set when
 //!   macrocell `i` (x fastest) holds at least one reference.
 //!

@@ -204,7 +204,8 @@ fn bench_scene(
     // second to the next (subject by subject, two builds each, the same scene's ratios moved 2×
     // between runs).
     let subjects = Subject::all(!args.no_peers);
-    let mut builds: Vec<(f64, Option<anyhow::Result<Built>>)> = subjects.iter().map(|_| (f64::INFINITY, None)).collect();
+    let mut builds: Vec<(f64, Option<anyhow::Result<Built>>)> =
+        subjects.iter().map(|_| (f64::INFINITY, None)).collect();
     for _ in 0..(args.repeat as usize).max(BUILD_ROUNDS) {
         for (&subject, (best, built)) in subjects.iter().zip(&mut builds) {
             pb.set_message(format!("{} · {} (build)", sc.name, subject.name()));
