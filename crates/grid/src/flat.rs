@@ -85,22 +85,20 @@ impl FlatGrid {
         ref_start[rank as usize] = refs.len() as u32;
         // Chunk c's occupied cells go to ref_start[rank of its first word ..].
         let chunk_rank = |c: usize| occupied.get(c * CHUNK).map_or(rank, |w| w.rank) as usize;
-        let mut parts = Vec::with_capacity(words.div_ceil(CHUNK));
-        let mut rest = &mut ref_start[..rank as usize];
-        for c in 0..words.div_ceil(CHUNK) {
-            let (part, tail) = std::mem::take(&mut rest).split_at_mut(chunk_rank(c + 1) - chunk_rank(c));
-            parts.push((c, part));
-            rest = tail;
-        }
+        let parts = crate::build::split_lengths(
+            &mut ref_start[..rank as usize],
+            (0..words.div_ceil(CHUNK)).map(|c| chunk_rank(c + 1) - chunk_rank(c)),
+        );
         #[cfg(feature = "parallel")]
         {
             use rayon::prelude::*;
             parts
                 .into_par_iter()
+                .enumerate()
                 .for_each(|(c, part)| gather(c * CHUNK, &occupied[c * CHUNK..((c + 1) * CHUNK).min(words)], part));
         }
         #[cfg(not(feature = "parallel"))]
-        for (c, part) in parts {
+        for (c, part) in parts.into_iter().enumerate() {
             gather(c * CHUNK, &occupied[c * CHUNK..((c + 1) * CHUNK).min(words)], part);
         }
         FlatGrid { geom, occupied, ref_start, refs }

@@ -71,26 +71,10 @@ pub fn triangle_bounds_with(tris: &[[Vec3; 3]], parallel: bool) -> Aabb {
     #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
-        return tris.par_chunks(16 * 1024).map(corner_bounds).reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
+        return tris.par_chunks(16 * 1024).map(Aabb::of_triangles).reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
     }
     let _ = parallel;
-    corner_bounds(tris)
-}
-
-/// The corners' bounds with nine running minima and maxima, one per corner coordinate, each
-/// in glam's rule (`a < b ? a : b`, one SIMD min), merged at the end: independent lanes, where
-/// one running box made every step wait for the last.
-fn corner_bounds(tris: &[[Vec3; 3]]) -> Aabb {
-    let (mut lo, mut hi) = ([f32::INFINITY; 9], [f32::NEG_INFINITY; 9]);
-    for t in tris {
-        let v: [f32; 9] = bytemuck::cast(*t);
-        for k in 0..9 {
-            lo[k] = if lo[k] < v[k] { lo[k] } else { v[k] };
-            hi[k] = if hi[k] > v[k] { hi[k] } else { v[k] };
-        }
-    }
-    let corner = |a: &[f32; 9], c: usize| Vec3::new(a[3 * c], a[3 * c + 1], a[3 * c + 2]);
-    (0..3).fold(Aabb::EMPTY, |b, c| b.union(&Aabb { min: corner(&lo, c), max: corner(&hi, c) }))
+    Aabb::of_triangles(tris)
 }
 
 /// Chooses the resolution and builds a flat grid: [`structure::build`] for [`GridKind::Flat`],

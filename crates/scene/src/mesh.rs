@@ -38,6 +38,22 @@ impl Aabb {
         b
     }
 
+    /// The bounds of every corner of `tris`, with nine running minima and maxima (one per
+    /// corner coordinate, each in glam's rule `a < b ? a : b`, one SIMD min) merged at the end:
+    /// independent lanes, where one running box made every step wait for the last.
+    pub fn of_triangles(tris: &[[Vec3; 3]]) -> Aabb {
+        let (mut lo, mut hi) = ([f32::INFINITY; 9], [f32::NEG_INFINITY; 9]);
+        for t in tris {
+            let v: [f32; 9] = bytemuck::cast(*t);
+            for k in 0..9 {
+                lo[k] = if lo[k] < v[k] { lo[k] } else { v[k] };
+                hi[k] = if hi[k] > v[k] { hi[k] } else { v[k] };
+            }
+        }
+        let corner = |a: &[f32; 9], c: usize| Vec3::new(a[3 * c], a[3 * c + 1], a[3 * c + 2]);
+        (0..3).fold(Aabb::EMPTY, |b, c| b.union(&Aabb { min: corner(&lo, c), max: corner(&hi, c) }))
+    }
+
     pub fn extent(&self) -> Vec3 {
         if self.is_empty() { Vec3::ZERO } else { self.max - self.min }
     }

@@ -88,3 +88,14 @@ pub fn check_cells(res: [u32; 3], limit: u64) -> Result<(), BuildError> {
     }
     Ok(())
 }
+
+/// Splits `v` into consecutive mutable pieces of the given lengths.
+pub(crate) fn split_lengths<T>(mut v: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut out = Vec::new();
+    for len in lengths {
+        let (a, b) = std::mem::take(&mut v).split_at_mut(len);
+        out.push(a);
+        v = b;
+    }
+    out
+}

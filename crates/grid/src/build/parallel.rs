@@ -9,7 +9,7 @@
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
-use super::{PhaseTimes, check_refs, zeroed_par};
+use super::{PhaseTimes, check_refs, split_lengths, zeroed_par};
 use crate::BuildError;
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES};
 use crate::insert::{InsertMode, box_cell_range, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
@@ -35,17 +35,6 @@ fn par_inclusive_scan(counts: &mut [u32]) -> Result<u64, BuildError> {
         }
     });
     Ok(total)
-}
-
-/// Splits `v` into consecutive mutable pieces of the given lengths.
-fn split_lengths<T>(mut v: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
-    let mut out = Vec::new();
-    for len in lengths {
-        let (a, b) = std::mem::take(&mut v).split_at_mut(len);
-        out.push(a);
-        v = b;
-    }
-    out
 }
 
 /// The cells triangle `tri` (prepared cell range `cells`) goes into within `layers`: the range
