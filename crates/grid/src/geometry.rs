@@ -194,8 +194,9 @@ impl GridRay {
 
 #[inline]
 fn cell_of(p: Vec3, res: UVec3) -> UVec3 {
-    let f = p.floor();
     let max = (res - UVec3::ONE).as_vec3();
-    // NaN-free by construction (p is finite); clamp handles points on the far faces.
-    f.clamp(Vec3::ZERO, max).as_uvec3()
+    // floor(p) clamped to [0, res − 1], without the libm call `floor` is on baseline x86-64:
+    // inside [0, res − 1] truncation is the floor, and below 0 (or above res − 1) both give the
+    // bound. NaN-free by construction (p is finite); the clamp also handles the far faces.
+    p.clamp(Vec3::ZERO, max).as_uvec3()
 }
