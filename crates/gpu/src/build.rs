@@ -2,8 +2,9 @@
 //! (`build_bounds.wgsl`), per-cell counts (`build_count.wgsl`), their exclusive prefix sum
 //! (`build_scan.wgsl` per block of 4096, block sums scanned recursively, `build_scan_add.wgsl`),
 //! the scatter of triangle indices (`build_scatter.wgsl`) and each cell's references sorted
-//! (`build_sort_cells.wgsl`); for macrocells, the occupancy bits from the cell table
-//! (`build_occupancy.wgsl`, per candidate A when the cost model chooses A, as on the CPU).
+//! (`build_sort_cells.wgsl`); the occupancy bit of every cell and, for macrocells, of every
+//! macrocell, from the cell table (`build_occupancy.wgsl` with A = 1 and A; per candidate A
+//! when the cost model chooses A, as on the CPU).
 //! Insertion is by bounding box with the conservative margin, the same f32 rule as
 //! `gridrt_grid::insert::box_cell_range`; the resolution is chosen on the CPU from the GPU's
 //! bounds (the cost model samples triangles). The result is a [`GpuStructure`] the trace and
@@ -139,18 +140,29 @@ impl GridBuilder {
         fine: &GpuGrid,
         a: u32,
     ) -> Result<(UVec3, wgpu::Buffer), GpuError> {
-        let macro_res = macro_resolution(fine.geom.res, a);
+        let label = "structure extra (occupancy/nodes/distance)";
+        self.occupancy_of(ctx, enc, label, fine.geom.res, &fine.structure.cells, a)
+    }
+
+    /// The occupancy bits of blocks of `a`³ cells of the grid at `res` whose cell table is
+    /// `cell_start` (`a` = 1: a bit per cell), recorded into `enc`.
+    fn occupancy_of(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        label: &'static str,
+        res: UVec3,
+        cell_start: &wgpu::Buffer,
+        a: u32,
+    ) -> Result<(UVec3, wgpu::Buffer), GpuError> {
+        let macro_res = macro_resolution(res, a);
         let words = (macro_res.x as u64 * macro_res.y as u64 * macro_res.z as u64).div_ceil(32);
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let bits = Self::buffer(ctx, "structure extra (occupancy/nodes/distance)", words, storage)?;
-        let params = BuildParams {
-            res: fine.geom.res.to_array(),
-            count: fine.cells as u32,
-            macro_edge: a,
-            ..Default::default()
-        };
-        let groups = (fine.cells as u32).div_ceil(GROUP);
-        Self::pass(ctx, enc, &self.occupancy, "build_occupancy", params, groups, &[&fine.structure.cells, &bits])?;
+        let bits = Self::buffer(ctx, label, words, storage)?;
+        let cells = res.x as u64 * res.y as u64 * res.z as u64;
+        let params = BuildParams { res: res.to_array(), count: cells as u32, macro_edge: a, ..Default::default() };
+        let groups = (cells as u32).div_ceil(GROUP);
+        Self::pass(ctx, enc, &self.occupancy, "build_occupancy", params, groups, &[cell_start, &bits])?;
         Ok((macro_res, bits))
     }
 
@@ -389,6 +401,8 @@ impl GridBuilder {
         let mut enc = Self::encoder(ctx, "grid build: sort cells");
         let groups = (cells as u32).div_ceil(GROUP * SORT_RUN);
         Self::pass(ctx, &mut enc, &self.sort, "build_sort_cells", params, groups, &[&cell_start, &refs])?;
+        // The bit per cell the trace kernels skip empty cells by (FlatGrid's occupancy bits).
+        let (_, occupied) = self.occupancy_of(ctx, &mut enc, "cell occupancy bits", geom.res, &cell_start, 1)?;
         ctx.queue.submit([enc.finish()]);
         wait(ctx)?;
         times.record_since("sort cells", start);
@@ -404,7 +418,8 @@ impl GridBuilder {
             refs,
             cells: cell_start,
             extra: None,
-            bytes: (cells + 1 + total) * WORD,
+            bytes: (cells + 1 + total) * WORD + occupied.size(),
+            occupied: Some(occupied),
         };
         Ok(GpuGrid {
             geom,

@@ -35,6 +35,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/walker_liu.wgsl", include_str!("../../../shaders/shared/walker_liu.wgsl")),
     ("shared/coherent.wgsl", include_str!("../../../shaders/shared/coherent.wgsl")),
     ("shared/closest_hit.wgsl", include_str!("../../../shaders/shared/closest_hit.wgsl")),
+    ("shared/occupied.wgsl", include_str!("../../../shaders/shared/occupied.wgsl")),
     ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
     ("shared/build.wgsl", include_str!("../../../shaders/shared/build.wgsl")),
     ("shared/build_triangles.wgsl", include_str!("../../../shaders/shared/build_triangles.wgsl")),

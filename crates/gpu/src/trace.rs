@@ -194,6 +194,9 @@ impl Tracer {
         if let Some(e) = &s.extra {
             entries.push(wgpu::BindGroupEntry { binding: 7, resource: e.as_entire_binding() });
         }
+        if let Some(o) = &s.occupied {
+            entries.push(wgpu::BindGroupEntry { binding: 8, resource: o.as_entire_binding() });
+        }
         let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace bind group"),
             layout: &pipe.get_bind_group_layout(0),

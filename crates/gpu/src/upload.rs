@@ -62,6 +62,9 @@ pub struct GpuStructure {
     pub cells: wgpu::Buffer,
     /// Occupancy bits (macrocell), nodes (hierarchies), packed distances (proximity).
     pub extra: Option<wgpu::Buffer>,
+    /// The flat and macrocell grids' bit per fine cell (`shaders/shared/occupied.wgsl`): the
+    /// `bits` of [`gridrt_grid::OccupancyWord`].
+    pub occupied: Option<wgpu::Buffer>,
     pub bytes: u64,
 }
 
@@ -78,6 +81,12 @@ impl GpuStructure {
         // The flat grids' kernels read the table of M + 1 offsets (the CPU keeps only the
         // occupied cells' offsets).
         let table: Vec<u32>;
+        let fine = match grid {
+            AnyGrid::Flat(f) => Some(f),
+            AnyGrid::Macrocell(m) => Some(&m.fine),
+            _ => None,
+        };
+        let occupied: Option<Vec<u32>> = fine.map(|f| f.occupied.iter().map(|w| w.bits).collect());
         let (refs, cells, extra): (&[u32], &[u8], Option<Vec<u8>>) = match grid {
             AnyGrid::Flat(f) => {
                 table = f.cell_table();
@@ -106,7 +115,22 @@ impl GpuStructure {
             Some(e) => Some(storage(ctx, "structure extra (occupancy/nodes/distance)", e, none)?),
             None => None,
         };
-        let bytes = refs.len() as u64 * 4 + cells.len() as u64 + extra.as_ref().map_or(0, |e| e.len() as u64);
-        Ok(GpuStructure { kind: grid.kind(), params, refs: refs_buf, cells: cells_buf, extra: extra_buf, bytes })
+        let occupied_buf = match &occupied {
+            Some(o) => Some(storage(ctx, "cell occupancy bits", bytemuck::cast_slice(o), none)?),
+            None => None,
+        };
+        let bytes = refs.len() as u64 * 4
+            + cells.len() as u64
+            + extra.as_ref().map_or(0, |e| e.len() as u64)
+            + occupied.as_ref().map_or(0, |o| o.len() as u64 * 4);
+        Ok(GpuStructure {
+            kind: grid.kind(),
+            params,
+            refs: refs_buf,
+            cells: cells_buf,
+            extra: extra_buf,
+            occupied: occupied_buf,
+            bytes,
+        })
     }
 }
