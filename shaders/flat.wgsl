@@ -1,10 +1,7 @@
-// Closest hit through a flat uniform grid (cell_start + refs, and a bit per cell).
+// Closest hit through a flat uniform grid (the compact layout of shared/flat_grid.wgsl).
 // CPU port: crates/grid/src/trace/mod.rs (`trace_flat`).
 //!include shared/closest_hit.wgsl
-//!include shared/occupied.wgsl
-
-// M + 1 offsets into `refs`. Mirrors FlatGrid::cell_start.
-@group(0) @binding(6) var<storage, read> cell_start: array<u32>;
+//!include shared/flat_grid.wgsl
 
 // The flat grid's walk: every crossed cell in order (called by `trace` in shared/closest_hit.wgsl).
 fn walk(g: GridRay) {
@@ -17,7 +14,8 @@ fn walk(g: GridRay) {
         let idx = cell_index(w.out_cell, params.res);
         // FlatGrid::visit: an empty cell only checks the best hit so far.
         if is_occupied(idx) {
-            if test_cell(cell_start[idx], cell_start[idx + 1u], w.out_t_exit) {
+            let r = refs_of(idx);
+            if test_cell(r.x, r.y, w.out_t_exit) {
                 return;
             }
         } else if done_at(w.out_t_exit) {

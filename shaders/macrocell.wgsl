@@ -1,9 +1,8 @@
 // Closest hit through macrocells over a flat grid: empty A^3 blocks are crossed in one step.
 // CPU port: crates/grid/src/macrocell.rs (`MacrocellGrid::trace`).
 //!include shared/closest_hit.wgsl
-//!include shared/occupied.wgsl
+//!include shared/flat_grid.wgsl
 
-@group(0) @binding(6) var<storage, read> cell_start: array<u32>;
 // One bit per macrocell (x fastest). Mirrors MacrocellGrid::occupancy.
 @group(0) @binding(7) var<storage, read> occupancy: array<u32>;
 
@@ -23,7 +22,8 @@ fn walk_block(fine: GridRay, m: vec3<i32>, t_enter: f32, t_exit: f32) -> bool {
         visit_cell();
         let idx = cell_index(lo + fw.out_cell, params.res);
         if is_occupied(idx) {
-            if test_cell(cell_start[idx], cell_start[idx + 1u], fw.out_t_exit) {
+            let r = refs_of(idx);
+            if test_cell(r.x, r.y, fw.out_t_exit) {
                 return true;
             }
         } else if done_at(fw.out_t_exit) {

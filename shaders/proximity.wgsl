@@ -2,8 +2,8 @@
 // distance k >= 2 from any triangle, jump out of the empty cube around it.
 // CPU port: crates/grid/src/proximity.rs (`ProximityGrid::trace`).
 //!include shared/closest_hit.wgsl
+//!include shared/flat_grid.wgsl
 
-@group(0) @binding(6) var<storage, read> cell_start: array<u32>;
 // Distance per cell, one byte each, four to a word. Mirrors ProximityGrid::distance.
 @group(0) @binding(7) var<storage, read> distance: array<u32>;
 
@@ -45,7 +45,13 @@ fn walk(g_in: GridRay) {
                 return;
             }
         }
-        if test_cell(cell_start[idx], cell_start[idx + 1u], w.out_t_exit) {
+        // Distance 0: an occupied cell.
+        if k == 0 {
+            let r = refs_of(idx);
+            if test_cell(r.x, r.y, w.out_t_exit) {
+                return;
+            }
+        } else if done_at(w.out_t_exit) {
             return;
         }
     }

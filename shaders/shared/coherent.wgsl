@@ -65,9 +65,9 @@ fn uniform_keys(base: u32) -> array<u32, 18> {
     return workgroupUniformLoad(&wg_copy);
 }
 
-// Tests the triangles of every occupied cell in the box lo..=hi of a flat cell table
-// (`is_occupied`, `cell_start`) whose cell is among this ray's own (own_lo..=own_hi) against
-// this invocation's ray.
+// Tests the triangles of every occupied cell in the box lo..=hi of a flat grid
+// (shared/flat_grid.wgsl) whose cell is among this ray's own (own_lo..=own_hi) against this
+// invocation's ray.
 fn test_cells(lo: vec3<u32>, hi: vec3<u32>, own_lo: vec3<u32>, own_hi: vec3<u32>) {
     let use_mailbox = params.mailbox != 0u;
     for (var z = max(lo.z, own_lo.z); z <= min(hi.z, own_hi.z); z++) {
@@ -79,7 +79,8 @@ fn test_cells(lo: vec3<u32>, hi: vec3<u32>, own_lo: vec3<u32>, own_hi: vec3<u32>
                 if !is_occupied(idx) {
                     continue;
                 }
-                for (var k = cell_start[idx]; k < cell_start[idx + 1u]; k++) {
+                let r = refs_of(idx);
+                for (var k = r.x; k < r.y; k++) {
                     test_triangle(refs[k], use_mailbox);
                 }
             }

@@ -12,12 +12,15 @@
 
 use glam::{UVec3, Vec3};
 use gridrt_grid::build::{MAX_REFS, PhaseTimes, check_cells};
+use gridrt_grid::flat::WORD_CELLS;
 use gridrt_grid::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use gridrt_grid::macrocell::{
     MACRO_SIZES, MacroSample, MacrocellGrid, PROBE_MULTIPLE, best_macro_size, check_macro_size, fine_resolution,
     macro_resolution,
 };
-use gridrt_grid::{AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, Resolution, ResolutionChoice, resolution};
+use gridrt_grid::{
+    AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, OccupancyWord, Resolution, ResolutionChoice, resolution,
+};
 use gridrt_scene::Aabb;
 use wgpu::util::DeviceExt;
 
@@ -46,6 +49,8 @@ pub struct GridBuilder {
     scan_add: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     sort: wgpu::ComputePipeline,
+    cell_bits: wgpu::ComputePipeline,
+    compact: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
 }
 
@@ -57,6 +62,8 @@ pub struct GpuGrid {
     pub geom: GridGeometry,
     pub structure: GpuStructure,
     pub cells: u64,
+    /// Cells holding references (entries of `ref_start` but the last).
+    pub occupied_cells: u64,
     pub refs: u64,
     /// Macrocell edge A and the macro resolution.
     pub macrocells: Option<(u32, UVec3)>,
@@ -89,6 +96,8 @@ impl GridBuilder {
             scatter: pipeline(ctx, "build_scatter.wgsl", "build_scatter")?,
             sort: pipeline(ctx, "build_sort_cells.wgsl", "build_sort_cells")?,
             occupancy: pipeline(ctx, "build_occupancy.wgsl", "build_occupancy")?,
+            cell_bits: pipeline(ctx, "build_cell_bits.wgsl", "build_cell_bits")?,
+            compact: pipeline(ctx, "build_compact.wgsl", "build_compact")?,
         })
     }
 
@@ -140,29 +149,19 @@ impl GridBuilder {
         fine: &GpuGrid,
         a: u32,
     ) -> Result<(UVec3, wgpu::Buffer), GpuError> {
-        let label = "structure extra (occupancy/nodes/distance)";
-        self.occupancy_of(ctx, enc, label, fine.geom.res, &fine.structure.cells, a)
-    }
-
-    /// The occupancy bits of blocks of `a`³ cells of the grid at `res` whose cell table is
-    /// `cell_start` (`a` = 1: a bit per cell), recorded into `enc`.
-    fn occupancy_of(
-        &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        label: &'static str,
-        res: UVec3,
-        cell_start: &wgpu::Buffer,
-        a: u32,
-    ) -> Result<(UVec3, wgpu::Buffer), GpuError> {
-        let macro_res = macro_resolution(res, a);
+        let macro_res = macro_resolution(fine.geom.res, a);
         let words = (macro_res.x as u64 * macro_res.y as u64 * macro_res.z as u64).div_ceil(32);
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let bits = Self::buffer(ctx, label, words, storage)?;
-        let cells = res.x as u64 * res.y as u64 * res.z as u64;
-        let params = BuildParams { res: res.to_array(), count: cells as u32, macro_edge: a, ..Default::default() };
-        let groups = (cells as u32).div_ceil(GROUP);
-        Self::pass(ctx, enc, &self.occupancy, "build_occupancy", params, groups, &[cell_start, &bits])?;
+        let bits = Self::buffer(ctx, "structure extra (occupancy/nodes/distance)", words, storage)?;
+        let params = BuildParams {
+            res: fine.geom.res.to_array(),
+            count: fine.cells as u32,
+            macro_edge: a,
+            ..Default::default()
+        };
+        let groups = (fine.cells as u32).div_ceil(GROUP);
+        let occupied = fine.structure.occupied.as_ref().expect("a flat grid's occupancy words");
+        Self::pass(ctx, enc, &self.occupancy, "build_occupancy", params, groups, &[occupied, &bits])?;
         Ok((macro_res, bits))
     }
 
@@ -401,11 +400,43 @@ impl GridBuilder {
         let mut enc = Self::encoder(ctx, "grid build: sort cells");
         let groups = (cells as u32).div_ceil(GROUP * SORT_RUN);
         Self::pass(ctx, &mut enc, &self.sort, "build_sort_cells", params, groups, &[&cell_start, &refs])?;
-        // The bit per cell the trace kernels skip empty cells by (FlatGrid's occupancy bits).
-        let (_, occupied) = self.occupancy_of(ctx, &mut enc, "cell occupancy bits", geom.res, &cell_start, 1)?;
         ctx.queue.submit([enc.finish()]);
         wait(ctx)?;
         times.record_since("sort cells", start);
+        // The compact layout (FlatGrid::new): occupancy words, their ranks, the occupied cells'
+        // starts; the table of M + 1 offsets is dropped.
+        let start = web_time::Instant::now();
+        let words = cells.div_ceil(WORD_CELLS as u64);
+        let occupied = Self::buffer(ctx, "cell occupancy words", 2 * words, storage)?;
+        let ranks = Self::buffer(ctx, "grid build word ranks", words + 1, storage)?;
+        let mut enc = Self::encoder(ctx, "grid build: cell bits");
+        let word_groups = (words as u32).div_ceil(GROUP);
+        Self::pass(
+            ctx,
+            &mut enc,
+            &self.cell_bits,
+            "build_cell_bits",
+            params,
+            word_groups,
+            &[&cell_start, &occupied, &ranks],
+        )?;
+        self.scan(ctx, &mut enc, &ranks, words + 1)?;
+        let occupied_cells =
+            Self::submit_and_read(ctx, enc, &ranks, words * WORD, 1, "the occupied cell count").await?[0] as u64;
+        let ref_start = Self::buffer(ctx, "ref_start", occupied_cells + 1, storage)?;
+        let mut enc = Self::encoder(ctx, "grid build: compact");
+        Self::pass(
+            ctx,
+            &mut enc,
+            &self.compact,
+            "build_compact",
+            params,
+            word_groups,
+            &[&cell_start, &occupied, &ranks, &ref_start],
+        )?;
+        ctx.queue.submit([enc.finish()]);
+        wait(ctx)?;
+        times.record_since("cell bits", start);
         ctx.check_device()?;
         let structure = GpuStructure {
             kind: GridKind::Flat,
@@ -416,15 +447,16 @@ impl GridBuilder {
                 ..GridParams::default()
             },
             refs,
-            cells: cell_start,
+            cells: ref_start,
             extra: None,
-            bytes: (cells + 1 + total) * WORD + occupied.size(),
+            bytes: (occupied_cells + 1 + total) * WORD + occupied.size(),
             occupied: Some(occupied),
         };
         Ok(GpuGrid {
             geom,
             structure,
             cells,
+            occupied_cells,
             refs: total,
             macrocells: None,
             macro_samples: Vec::new(),
@@ -435,15 +467,23 @@ impl GridBuilder {
 
     /// The grid read back into the CPU's form.
     pub async fn read_back_async(&self, ctx: &GpuContext, grid: &GpuGrid) -> Result<AnyGrid, GpuError> {
-        let cell_start = Self::submit_and_read(
+        let ref_start = Self::submit_and_read(
             ctx,
             Self::encoder(ctx, "grid readback"),
             &grid.structure.cells,
             0,
-            grid.cells + 1,
-            "the cells",
+            grid.occupied_cells + 1,
+            "the occupied cells' starts",
         )
         .await?;
+        let words = grid.cells.div_ceil(WORD_CELLS as u64);
+        let occupied = grid.structure.occupied.as_ref().expect("a flat grid's occupancy words");
+        let occupied: Vec<OccupancyWord> =
+            Self::submit_and_read(ctx, Self::encoder(ctx, "grid readback"), occupied, 0, 2 * words, "the occupancy")
+                .await?
+                .chunks_exact(2)
+                .map(|w| OccupancyWord { bits: w[0], rank: w[1] })
+                .collect();
         let refs = if grid.refs == 0 {
             Vec::new()
         } else {
@@ -457,7 +497,7 @@ impl GridBuilder {
             )
             .await?
         };
-        let fine = FlatGrid::new(grid.geom, cell_start, refs);
+        let fine = FlatGrid { geom: grid.geom, occupied, ref_start, refs };
         Ok(match (grid.macrocells, &grid.structure.extra) {
             (Some((a, macro_res)), Some(bits)) => {
                 let words = bits.size() / WORD;

@@ -58,12 +58,13 @@ pub struct GpuStructure {
     /// filled per dispatch.
     pub params: GridParams,
     pub refs: wgpu::Buffer,
-    /// The table of M + 1 offsets (flat, macrocell, proximity: [`gridrt_grid::FlatGrid::cell_table`]) or the hierarchy's `cells`.
+    /// The occupied cells' starts (flat, macrocell, proximity: [`gridrt_grid::FlatGrid::ref_start`])
+    /// or the hierarchy's `cells`.
     pub cells: wgpu::Buffer,
     /// Occupancy bits (macrocell), nodes (hierarchies), packed distances (proximity).
     pub extra: Option<wgpu::Buffer>,
-    /// The flat and macrocell grids' bit per fine cell (`shaders/shared/occupied.wgsl`): the
-    /// `bits` of [`gridrt_grid::OccupancyWord`].
+    /// The flat grid's occupancy words (flat, macrocell, proximity;
+    /// `shaders/shared/flat_grid.wgsl`): [`gridrt_grid::OccupancyWord`]s, bits and rank.
     pub occupied: Option<wgpu::Buffer>,
     pub bytes: u64,
 }
@@ -80,28 +81,27 @@ impl GpuStructure {
         let none = wgpu::BufferUsages::empty();
         // The flat grids' kernels read the table of M + 1 offsets (the CPU keeps only the
         // occupied cells' offsets).
-        let table: Vec<u32>;
         let fine = match grid {
             AnyGrid::Flat(f) => Some(f),
             AnyGrid::Macrocell(m) => Some(&m.fine),
+            AnyGrid::Proximity(p) => Some(&p.grid),
             _ => None,
         };
-        let occupied: Option<Vec<u32>> = fine.map(|f| f.occupied.iter().map(|w| w.bits).collect());
+        let occupied: Option<Vec<[u32; 2]>> = fine.map(|f| f.occupied.iter().map(|w| [w.bits, w.rank]).collect());
         let (refs, cells, extra): (&[u32], &[u8], Option<Vec<u8>>) = match grid {
-            AnyGrid::Flat(f) => {
-                table = f.cell_table();
-                (&f.refs, bytemuck::cast_slice(&table), None)
-            }
+            AnyGrid::Flat(f) => (&f.refs, bytemuck::cast_slice(&f.ref_start), None),
             AnyGrid::Macrocell(m) => {
                 params.macro_edge = m.a;
-                table = m.fine.cell_table();
-                (&m.fine.refs, bytemuck::cast_slice(&table), Some(bytemuck::cast_slice(&m.occupancy).to_vec()))
+                (
+                    &m.fine.refs,
+                    bytemuck::cast_slice(&m.fine.ref_start),
+                    Some(bytemuck::cast_slice(&m.occupancy).to_vec()),
+                )
             }
             AnyGrid::Proximity(p) => {
                 let mut packed = p.distance.clone();
                 packed.resize(packed.len().div_ceil(4) * 4, 0);
-                table = p.grid.cell_table();
-                (&p.grid.refs, bytemuck::cast_slice(&table), Some(packed))
+                (&p.grid.refs, bytemuck::cast_slice(&p.grid.ref_start), Some(packed))
             }
             AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => {
                 let nodes: Vec<GpuNode> =
@@ -116,13 +116,13 @@ impl GpuStructure {
             None => None,
         };
         let occupied_buf = match &occupied {
-            Some(o) => Some(storage(ctx, "cell occupancy bits", bytemuck::cast_slice(o), none)?),
+            Some(o) => Some(storage(ctx, "cell occupancy words", bytemuck::cast_slice(o), none)?),
             None => None,
         };
         let bytes = refs.len() as u64 * 4
             + cells.len() as u64
             + extra.as_ref().map_or(0, |e| e.len() as u64)
-            + occupied.as_ref().map_or(0, |o| o.len() as u64 * 4);
+            + occupied.as_ref().map_or(0, |o| o.len() as u64 * 8);
         Ok(GpuStructure {
             kind: grid.kind(),
             params,

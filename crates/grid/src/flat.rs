@@ -2,7 +2,8 @@
 //! cell order (`refs`) and where each cell's run starts — with the offsets of empty cells
 //! dropped: an occupancy bit per cell, and per 32 cells the rank that finds an occupied cell's
 //! offset (`ref_start`). Most cells of a grid are empty, so a grid costs about a quarter of a
-//! byte per cell, plus four bytes per occupied cell and per reference.
+//! byte per cell, plus four bytes per occupied cell and per reference. The GPU holds the same
+//! arrays (`shaders/shared/flat_grid.wgsl`).
 //!
 //! Built sort-last in linear time by [`crate::build::bucket`] (serial) or
 //! [`crate::build::parallel`] (bit-identical): references in a cell are in increasing triangle
@@ -105,7 +106,8 @@ impl FlatGrid {
     }
 
     /// The table of M + 1 offsets the builds produce (cell `c` owns
-    /// `refs[t[c]..t[c + 1]]`): what the GPU kernels read, and what `new` compacts.
+    /// `refs[t[c]..t[c + 1]]`), which `new` compacts: for digests and tests (the CPU and GPU
+    /// kernels read the compact arrays).
     pub fn cell_table(&self) -> Vec<u32> {
         let cells = self.geom.cell_count() as usize;
         let mut t = Vec::with_capacity(cells + 1);
