@@ -173,6 +173,8 @@ pub struct PacketArgs {
     pub tile: u32,
 }
 
+// Read by the commands (native only).
+#[cfg(not(target_arch = "wasm32"))]
 impl PacketArgs {
     pub fn on(&self) -> bool {
         self.packets == Switch::On

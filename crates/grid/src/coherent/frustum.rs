@@ -17,6 +17,9 @@ use gridrt_scene::Ray;
 use crate::geometry::GridGeometry;
 use crate::ray::PreparedRay;
 
+/// Slices [`SliceWalk::coherent_enough`] samples at most (plus one).
+pub const COHERENCE_SAMPLES: u32 = 16;
+
 /// Widening of each slice rectangle and each ray's slice range, in cells.
 pub const SLICE_MARGIN_CELLS: f64 = 1.0 / 512.0;
 
@@ -234,29 +237,28 @@ impl SliceWalk {
     /// Whether walking the rays as a packet visits fewer cells than `ratio` times the cells
     /// they cross one by one: the frustum of rays that start or end far apart (shadow rays
     /// from different depths, tiles over silhouettes) can cover many more cells than the rays.
-    /// The slices' rectangles are kept in `rects` (step `first + i` at `i`), for the walk to
-    /// reuse until the frustum is updated.
-    pub fn coherent_enough(&self, res: UVec3, ratio: f64, rects: &mut Vec<Option<SliceRect>>) -> bool {
+    /// The frustum's cells are estimated from at most [`COHERENCE_SAMPLES`] evenly spaced
+    /// slices (a rectangle's sides change linearly from slice to slice): the walk computes the
+    /// rectangles of the slices it reaches, and most packets end long before the last slice.
+    /// The choice only decides how the rays are traced, never their hits.
+    pub fn coherent_enough(&self, res: UVec3, ratio: f64) -> bool {
         let budget = ratio * self.single_ray_cells;
+        let steps = self.steps();
+        if steps.is_empty() {
+            return true;
+        }
+        let stride = (steps.end() - steps.start()) / COHERENCE_SAMPLES + 1;
         let mut cells = 0.0;
-        rects.clear();
-        for j in self.steps() {
-            let rect = self.rect(j, res);
-            rects.push(rect);
-            if let Some(r) = rect {
+        for j in steps.step_by(stride as usize) {
+            if let Some(r) = self.rect(j, res) {
                 let n = (r.hi - r.lo + UVec3::ONE).as_dvec3();
-                cells += n.x * n.y * n.z;
+                cells += n.x * n.y * n.z * stride as f64;
                 if cells > budget {
                     return false;
                 }
             }
         }
         true
-    }
-
-    /// The first step of the walk.
-    pub fn first_step(&self) -> u32 {
-        self.first
     }
 
     /// Recomputes the frustum's bounds over the `active` lanes.

@@ -148,8 +148,6 @@ pub struct Packet {
     active: Vec<u32>,
     rays: PacketRays,
     mailbox: Mailbox<PACKET_MAILBOX_SIZE>,
-    /// The slices' rectangles of the frustum as the packet starts.
-    rects: Vec<Option<frustum::SliceRect>>,
 }
 
 /// How a packet was traced.
@@ -175,7 +173,7 @@ impl Packet {
     ) -> PacketWalk {
         assert!(rays.len() == hits.len() && rays.len() == stats.len(), "one hit and one stats record per ray");
         let walk = SliceWalk::new(grid.geom(), rays, &mut self.lanes, &mut self.active)
-            .filter(|w| w.coherent_enough(grid.geom().res, COHERENCE_RATIO, &mut self.rects));
+            .filter(|w| w.coherent_enough(grid.geom().res, COHERENCE_RATIO));
         let Some(mut walk) = walk else {
             for ((r, h), s) in rays.iter().zip(hits.iter_mut()).zip(stats.iter_mut()) {
                 (*h, *s) = single(r);
@@ -201,16 +199,13 @@ impl Packet {
             };
         };
         let mut next_check = 0u32;
-        let mut updated = false;
         for j in walk.steps() {
             // cells_before[j]: the running total before step j.
             while self.cells_before.len() < j as usize {
                 self.cells_before.push(cells);
             }
             self.cells_before.push(cells);
-            // The rectangles of the frustum as it started, until it is updated.
-            let rect = if updated { walk.rect(j, res) } else { self.rects[(j - walk.first_step()) as usize] };
-            let Some(rect) = rect else { continue };
+            let Some(rect) = walk.rect(j, res) else { continue };
             let (lo, hi) = (rect.lo, rect.hi);
             let n = (hi - lo + UVec3::ONE).as_u64vec3();
             cells += n.x * n.y * n.z;
@@ -262,7 +257,6 @@ impl Packet {
             if dead >= packet_test::LANES {
                 self.rays.gather(lanes, &self.active);
                 walk.update(lanes, &self.active);
-                updated = true;
             }
         }
         for &i in &self.active {
