@@ -42,6 +42,11 @@ impl<'a> ClosestHit<'a> {
     /// lies before `t_exit`, so no later cell can hold a closer one.
     #[inline]
     pub fn test_cell(&mut self, refs: &[u32], t_exit: f32) -> bool {
+        // The triangles' loads start together, not one test after another: random rays miss
+        // the cache on most of them.
+        for &tri in refs {
+            prefetch(self.tris, tri);
+        }
         for &tri in refs {
             if let Some(mb) = self.mailbox.as_mut()
                 && mb.check_and_insert(tri)
@@ -63,6 +68,25 @@ impl<'a> ClosestHit<'a> {
     pub fn done_at(&self, t_exit: f32) -> bool {
         self.best.t < t_exit
     }
+}
+
+/// Asks the CPU to start loading triangle `i` of `tris` into the cache (the line of its first
+/// corner). A hint only: it changes no result, and elsewhere than on x86-64 it does nothing.
+#[inline(always)]
+fn prefetch(tris: &[[Vec3; 3]], i: u32) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let p = tris.as_ptr().wrapping_add(i as usize).cast::<i8>();
+        // SAFETY: a prefetch never faults and reads nothing the program sees, whatever the
+        // address; SSE is part of the x86-64 baseline.
+        #[allow(unsafe_code)]
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p)
+        };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (tris, i);
 }
 
 /// The closest hit of `ray` among `tris` (the triangles the structure was built from): `walk`
