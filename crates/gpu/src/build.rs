@@ -368,9 +368,28 @@ impl GridBuilder {
             &[&scene.triangles, &cell_start],
         )?;
         self.scan(ctx, &mut enc, &cell_start, cells + 1)?;
-        let total =
-            Self::submit_and_read(ctx, enc, &cell_start, cells * WORD, 1, "the reference count").await?[0] as u64;
-        times.record_since("count + scan", start);
+        // The compact layout's occupancy words and their counts, scanned into ranks (as
+        // FlatGrid::new makes them), from the scanned table; read back with the reference count.
+        let words = cells.div_ceil(WORD_CELLS as u64);
+        let occupied = Self::buffer(ctx, "cell occupancy words", 2 * words, storage)?;
+        let ranks = Self::buffer(ctx, "grid build word ranks", words + 1, storage)?;
+        let word_groups = (words as u32).div_ceil(GROUP);
+        Self::pass(
+            ctx,
+            &mut enc,
+            &self.cell_bits,
+            "build_cell_bits",
+            params,
+            word_groups,
+            &[&cell_start, &occupied, &ranks],
+        )?;
+        self.scan(ctx, &mut enc, &ranks, words + 1)?;
+        let totals = Self::buffer(ctx, "grid build totals", 2, storage)?;
+        enc.copy_buffer_to_buffer(&cell_start, cells * WORD, &totals, 0, WORD);
+        enc.copy_buffer_to_buffer(&ranks, words * WORD, &totals, WORD, WORD);
+        let counts = Self::submit_and_read(ctx, enc, &totals, 0, 2, "the reference and occupied cell counts").await?;
+        let (total, occupied_cells) = (counts[0] as u64, counts[1] as u64);
+        times.record_since("count + scan + cell bits", start);
         if total > MAX_REFS {
             return Err(GpuError::Unsupported(format!("{total} references, more than the limit of {MAX_REFS}")));
         }
@@ -397,34 +416,12 @@ impl GridBuilder {
         wait(ctx)?;
         times.record_since("scatter", start);
         let start = web_time::Instant::now();
-        let mut enc = Self::encoder(ctx, "grid build: sort cells");
+        // Each cell's references sorted, and the occupied cells' starts (the table of M + 1
+        // offsets is then dropped), in one submission.
+        let ref_start = Self::buffer(ctx, "ref_start", occupied_cells + 1, storage)?;
+        let mut enc = Self::encoder(ctx, "grid build: sort cells, compact");
         let groups = (cells as u32).div_ceil(GROUP * SORT_RUN);
         Self::pass(ctx, &mut enc, &self.sort, "build_sort_cells", params, groups, &[&cell_start, &refs])?;
-        ctx.queue.submit([enc.finish()]);
-        wait(ctx)?;
-        times.record_since("sort cells", start);
-        // The compact layout (FlatGrid::new): occupancy words, their ranks, the occupied cells'
-        // starts; the table of M + 1 offsets is dropped.
-        let start = web_time::Instant::now();
-        let words = cells.div_ceil(WORD_CELLS as u64);
-        let occupied = Self::buffer(ctx, "cell occupancy words", 2 * words, storage)?;
-        let ranks = Self::buffer(ctx, "grid build word ranks", words + 1, storage)?;
-        let mut enc = Self::encoder(ctx, "grid build: cell bits");
-        let word_groups = (words as u32).div_ceil(GROUP);
-        Self::pass(
-            ctx,
-            &mut enc,
-            &self.cell_bits,
-            "build_cell_bits",
-            params,
-            word_groups,
-            &[&cell_start, &occupied, &ranks],
-        )?;
-        self.scan(ctx, &mut enc, &ranks, words + 1)?;
-        let occupied_cells =
-            Self::submit_and_read(ctx, enc, &ranks, words * WORD, 1, "the occupied cell count").await?[0] as u64;
-        let ref_start = Self::buffer(ctx, "ref_start", occupied_cells + 1, storage)?;
-        let mut enc = Self::encoder(ctx, "grid build: compact");
         Self::pass(
             ctx,
             &mut enc,
@@ -436,7 +433,7 @@ impl GridBuilder {
         )?;
         ctx.queue.submit([enc.finish()]);
         wait(ctx)?;
-        times.record_since("cell bits", start);
+        times.record_since("sort cells + compact", start);
         ctx.check_device()?;
         let structure = GpuStructure {
             kind: GridKind::Flat,

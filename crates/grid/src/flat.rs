@@ -13,7 +13,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
-use crate::build::{BuildOptions, PhaseTimes, bucket};
+use crate::build::{BuildOptions, BuildScratch, PhaseTimes, bucket};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use crate::stats::StructureStats;
 use crate::trace::closest_hit::ClosestHit;
@@ -49,6 +49,18 @@ impl FlatGrid {
     /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]` (the
     /// builds' table of M + 1 offsets), stored compactly: the empty cells' offsets are dropped.
     pub fn new(geom: GridGeometry, cell_start: Vec<u32>, refs: Vec<u32>) -> FlatGrid {
+        FlatGrid::compact(geom, &cell_start, refs, Vec::new(), Vec::new())
+    }
+
+    /// [`FlatGrid::new`] writing the occupancy words and offsets into `occupied` and
+    /// `ref_start` (their old contents are dropped, their memory reused).
+    fn compact(
+        geom: GridGeometry,
+        cell_start: &[u32],
+        refs: Vec<u32>,
+        mut occupied: Vec<OccupancyWord>,
+        mut ref_start: Vec<u32>,
+    ) -> FlatGrid {
         let cells = cell_start.len().saturating_sub(1);
         // Word k holds cells 32k … 32k + 31: 33 offsets, compared pairwise.
         let bits = |k: usize| {
@@ -70,19 +82,21 @@ impl FlatGrid {
         };
         // Words per parallel chunk (128k cells).
         const CHUNK: usize = 4096;
+        occupied.clear();
         #[cfg(feature = "parallel")]
-        let mut occupied: Vec<OccupancyWord> = {
+        {
             use rayon::prelude::*;
-            (0..words).into_par_iter().map(|k| OccupancyWord { bits: bits(k), rank: 0 }).collect()
-        };
+            occupied.par_extend((0..words).into_par_iter().map(|k| OccupancyWord { bits: bits(k), rank: 0 }));
+        }
         #[cfg(not(feature = "parallel"))]
-        let mut occupied: Vec<OccupancyWord> = (0..words).map(|k| OccupancyWord { bits: bits(k), rank: 0 }).collect();
+        occupied.extend((0..words).map(|k| OccupancyWord { bits: bits(k), rank: 0 }));
         let mut rank = 0u32;
         for w in &mut occupied {
             w.rank = rank;
             rank += w.bits.count_ones();
         }
-        let mut ref_start = vec![0u32; rank as usize + 1];
+        ref_start.clear();
+        ref_start.resize(rank as usize + 1, 0);
         ref_start[rank as usize] = refs.len() as u32;
         // Chunk c's occupied cells go to ref_start[rank of its first word ..].
         let chunk_rank = |c: usize| occupied.get(c * CHUNK).map_or(rank, |w| w.rank) as usize;
@@ -206,5 +220,30 @@ impl FlatGrid {
         }
         let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;
         Ok(times.record("cell bits", || FlatGrid::new(geom, cell_start, refs)))
+    }
+
+    /// [`FlatGrid::build`] into the arrays of `scratch` (see [`BuildScratch`]): the same grid,
+    /// without the page faults of fresh memory when `scratch` holds a previous build's arrays.
+    /// The serial build ignores `scratch`.
+    pub fn build_reusing(
+        tris: &[[Vec3; 3]],
+        geom: GridGeometry,
+        opts: BuildOptions,
+        times: &mut PhaseTimes,
+        scratch: &mut BuildScratch,
+    ) -> Result<FlatGrid, BuildError> {
+        if tris.len() as u64 >= u32::MAX as u64 {
+            return Err(BuildError::TooManyTriangles(tris.len() as u64));
+        }
+        #[cfg(feature = "parallel")]
+        if opts.parallel {
+            let (cell_start, refs) = crate::build::parallel::bucket_reusing(tris, &geom, opts.insert, times, scratch)?;
+            let (occupied, ref_start) = (std::mem::take(&mut scratch.occupied), std::mem::take(&mut scratch.ref_start));
+            let grid = times.record("cell bits", || FlatGrid::compact(geom, &cell_start, refs, occupied, ref_start));
+            scratch.cell_table = cell_start;
+            return Ok(grid);
+        }
+        let _ = scratch;
+        FlatGrid::build(tris, geom, opts, times)
     }
 }

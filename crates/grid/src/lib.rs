@@ -31,7 +31,7 @@ use glam::Vec3;
 use gridrt_scene::Aabb;
 use thiserror::Error;
 
-pub use build::{BuildOptions, PhaseTimes, check_cells};
+pub use build::{BuildOptions, BuildScratch, PhaseTimes, check_cells};
 pub use coherent::{PacketOptions, PacketStats};
 pub use flat::{FlatGrid, OccupancyWord};
 pub use geometry::GridGeometry;

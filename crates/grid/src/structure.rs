@@ -5,7 +5,7 @@ use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
 use serde::{Deserialize, Serialize};
 
-use crate::build::{BuildOptions, PhaseTimes};
+use crate::build::{BuildOptions, BuildScratch, PhaseTimes};
 use crate::coherent::{self, PacketOptions, PacketStats};
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
@@ -258,6 +258,25 @@ impl AnyGrid {
 
 /// Builds the structure `cfg` over `tris`.
 pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildReport), BuildError> {
+    build_with(tris, cfg, None)
+}
+
+/// [`build`] for a grid rebuilt every frame: the flat and proximity grids' arrays come from
+/// `scratch` (hand the previous frame's grid back with [`BuildScratch::recycle`]). The same
+/// grid as [`build`].
+pub fn build_reusing(
+    tris: &[[Vec3; 3]],
+    cfg: &GridConfig,
+    scratch: &mut BuildScratch,
+) -> Result<(AnyGrid, BuildReport), BuildError> {
+    build_with(tris, cfg, Some(scratch))
+}
+
+fn build_with(
+    tris: &[[Vec3; 3]],
+    cfg: &GridConfig,
+    scratch: Option<&mut BuildScratch>,
+) -> Result<(AnyGrid, BuildReport), BuildError> {
     let mut times = PhaseTimes::default();
     let bounds = times.record("bounds", || triangle_bounds_with(tris, cfg.build.parallel));
     let choose = |times: &mut PhaseTimes, policy: Resolution| {
@@ -275,7 +294,11 @@ pub fn build(tris: &[[Vec3; 3]], cfg: &GridConfig) -> Result<(AnyGrid, BuildRepo
     let (grid, choice) = match cfg.kind {
         GridKind::Flat | GridKind::Proximity => {
             let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto))?;
-            let g = FlatGrid::build(tris, GridGeometry::new(&bounds, choice.resolution), cfg.build, &mut times)?;
+            let geom = GridGeometry::new(&bounds, choice.resolution);
+            let g = match scratch {
+                Some(s) => FlatGrid::build_reusing(tris, geom, cfg.build, &mut times, s)?,
+                None => FlatGrid::build(tris, geom, cfg.build, &mut times)?,
+            };
             let grid = if cfg.kind == GridKind::Flat {
                 AnyGrid::Flat(g)
             } else {

@@ -94,12 +94,15 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let pb = progress(frames as u64, "frames");
     let mut rows = Vec::with_capacity(frames as usize);
     let mut shadow = Vec::new();
+    // Each frame's grid is built into the previous frame's arrays (no fresh memory per frame).
+    let mut scratch = gridrt_grid::BuildScratch::default();
     for k in 0..frames {
         let time = player.frame_time(first.seconds, k, args.fps);
         let start = Instant::now();
         player.pose(time)?;
         let posed = Instant::now();
-        let (grid, _) = build_grid(&player.tris, &cfg)?;
+        let (grid, _) = gridrt_grid::structure::build_reusing(&player.tris, &cfg, &mut scratch)
+            .with_context(|| format!("building the {} grid", cfg.kind))?;
         let built = Instant::now();
         let tris = &player.tris;
         // Hits, shadowed rays, the end of tracing, and the image when it is wanted (the CPU
@@ -138,6 +141,7 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
             primary_hits,
             shadowed,
         });
+        scratch.recycle(grid);
         if let (Some(dir), Some(rgba)) = (&args.frames_dir, rgba) {
             let path = dir.join(format!("frame_{k:05}.png"));
             image::save_buffer(&path, &rgba, width, height, image::ExtendedColorType::Rgba8)

@@ -9,7 +9,7 @@
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
-use super::{PhaseTimes, check_refs, split_lengths, zeroed_par};
+use super::{PhaseTimes, check_refs, split_lengths};
 use crate::BuildError;
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES};
 use crate::insert::{InsertMode, box_cell_range, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
@@ -100,6 +100,17 @@ pub fn bucket(
     geom: &GridGeometry,
     mode: InsertMode,
     times: &mut PhaseTimes,
+) -> Result<(Vec<u32>, Vec<u32>), BuildError> {
+    bucket_reusing(tris, geom, mode, times, &mut super::BuildScratch::default())
+}
+
+/// [`bucket`] writing into `scratch`'s M + 1 table and references (taken out of it).
+pub fn bucket_reusing(
+    tris: &[[Vec3; 3]],
+    geom: &GridGeometry,
+    mode: InsertMode,
+    times: &mut PhaseTimes,
+    scratch: &mut super::BuildScratch,
 ) -> Result<(Vec<u32>, Vec<u32>), BuildError> {
     let geom = *geom;
     let cells = geom.cell_count() as usize;
@@ -201,8 +212,9 @@ pub fn bucket(
     // prefix sum (each cell's end), then the scatter decrements each cell's end once per
     // reference, filling the cell backwards, so each entry ends at its cell's start. No
     // cursor array, no second M-sized allocation.
-    // Both zero-filled on all threads (see `zeroed_par`); the time is the phase's that needs it.
-    let mut offsets = times.record("count", || zeroed_par::<u32>(cells + 1, "the cell table"))?;
+    // Both zero-filled on all threads (see `refill_par`); the time is the phase's that needs it.
+    let mut offsets = std::mem::take(&mut scratch.cell_table);
+    times.record("count", || super::refill_par(&mut offsets, cells + 1, "the cell table"))?;
     times.record("count", || {
         split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells)).into_par_iter().enumerate().for_each(
             |(s, part)| {
@@ -216,7 +228,8 @@ pub fn bucket(
     });
     let total = times.record("scan", || par_inclusive_scan(&mut offsets[..cells]))?;
     offsets[cells] = total as u32;
-    let mut refs = times.record("scatter", || zeroed_par::<u32>(total as usize, "triangle references"))?;
+    let mut refs = std::mem::take(&mut scratch.refs);
+    times.record("scatter", || super::refill_par(&mut refs, total as usize, "triangle references"))?;
     times.record("scatter", || {
         // A slab's references start where the cell before it ends.
         let slab_start = |s: usize| {

@@ -252,6 +252,9 @@ fn bench_scene(
     let mut sums = vec![Totals::default(); strategies.len()];
     #[cfg(feature = "peers")]
     let mut refit_trees: Vec<Option<super::peers::PeerBvh>> = strategies.iter().map(|_| None).collect();
+    // Each grid strategy rebuilds into its previous frame's arrays (as the refit tree keeps its
+    // nodes): a rebuild every frame does not pay fresh memory's page faults again.
+    let mut scratches: Vec<gridrt_grid::BuildScratch> = strategies.iter().map(|_| Default::default()).collect();
     let mut pose_ms = 0.0;
     for k in 0..frames {
         pb.set_message(format!("{name} · frame {k}"));
@@ -267,7 +270,12 @@ fn bench_scene(
             let start = Instant::now();
             let built = match strategy {
                 Strategy::Grid(kind) | Strategy::GridPackets(kind) => Built::Grid(
-                    structure::build(tris, &GridConfig { kind, cost: *cost, ..GridConfig::default() })?.0,
+                    structure::build_reusing(
+                        tris,
+                        &GridConfig { kind, cost: *cost, ..GridConfig::default() },
+                        &mut scratches[s],
+                    )?
+                    .0,
                     matches!(strategy, Strategy::GridPackets(_)).then_some(packets),
                 ),
                 #[cfg(feature = "peers")]
@@ -304,9 +312,12 @@ fn bench_scene(
                 }
                 None => reference = Some((hits, shadow_hits)),
             }
-            #[cfg(feature = "peers")]
-            if let (Strategy::Refit(_), Built::Peer(tree)) = (strategy, built) {
-                refit_trees[s] = Some(tree);
+            match (strategy, built) {
+                (_, Built::Grid(grid, _)) => scratches[s].recycle(grid),
+                #[cfg(feature = "peers")]
+                (Strategy::Refit(_), Built::Peer(tree)) => refit_trees[s] = Some(tree),
+                #[cfg(feature = "peers")]
+                _ => {}
             }
         }
         pb.inc(1);

@@ -72,6 +72,7 @@ pub enum Subject {
 
 impl Subject {
     pub fn all(with_peers: bool) -> Vec<Subject> {
+        #[cfg_attr(not(feature = "peers"), allow(unused_mut))]
         let mut v: Vec<Subject> = GridKind::ALL.iter().map(|&k| Subject::Grid(k)).collect();
         #[cfg(feature = "peers")]
         if with_peers {

@@ -43,6 +43,7 @@ pub fn cases(args: &BenchArgs) -> Vec<(&'static str, Vec<[Vec3; 3]>)> {
 
 /// The subjects whose build is scaled: the flat grid and the peers' fastest builds.
 fn subjects(args: &BenchArgs) -> Vec<Subject> {
+    #[cfg_attr(not(feature = "peers"), allow(unused_mut))]
     let mut v = vec![Subject::Grid(gridrt_grid::GridKind::Flat)];
     #[cfg(feature = "peers")]
     if !args.no_peers {
