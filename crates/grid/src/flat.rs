@@ -210,16 +210,7 @@ impl FlatGrid {
         opts: BuildOptions,
         times: &mut PhaseTimes,
     ) -> Result<FlatGrid, BuildError> {
-        if tris.len() as u64 >= u32::MAX as u64 {
-            return Err(BuildError::TooManyTriangles(tris.len() as u64));
-        }
-        #[cfg(feature = "parallel")]
-        if opts.parallel {
-            let (cell_start, refs) = crate::build::parallel::bucket(tris, &geom, opts.insert, times)?;
-            return Ok(times.record("cell bits", || FlatGrid::new(geom, cell_start, refs)));
-        }
-        let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;
-        Ok(times.record("cell bits", || FlatGrid::new(geom, cell_start, refs)))
+        FlatGrid::build_reusing(tris, geom, opts, times, &mut BuildScratch::default())
     }
 
     /// [`FlatGrid::build`] into the arrays of `scratch` (see [`BuildScratch`]): the same grid,
@@ -244,6 +235,7 @@ impl FlatGrid {
             return Ok(grid);
         }
         let _ = scratch;
-        FlatGrid::build(tris, geom, opts, times)
+        let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;
+        Ok(times.record("cell bits", || FlatGrid::new(geom, cell_start, refs)))
     }
 }

@@ -94,17 +94,8 @@ struct SlabBins {
 /// Most cells in one slab: 128k cells, 512 KiB of the cell table.
 const SLAB_CELLS: usize = 1 << 17;
 
-/// [`super::bucket::bucket`] over all of `tris` on all threads, with the same output.
-pub fn bucket(
-    tris: &[[Vec3; 3]],
-    geom: &GridGeometry,
-    mode: InsertMode,
-    times: &mut PhaseTimes,
-) -> Result<(Vec<u32>, Vec<u32>), BuildError> {
-    bucket_reusing(tris, geom, mode, times, &mut super::BuildScratch::default())
-}
-
-/// [`bucket`] writing into `scratch`'s M + 1 table and references (taken out of it).
+/// [`super::bucket::bucket`] over all of `tris` on all threads, with the same output, written
+/// into `scratch`'s M + 1 table and references (taken out of it; their memory reused).
 pub fn bucket_reusing(
     tris: &[[Vec3; 3]],
     geom: &GridGeometry,
