@@ -2,9 +2,11 @@
 //! (`build_bounds.wgsl`), per-cell counts (`build_count.wgsl`), their exclusive prefix sum
 //! (`build_scan.wgsl` per block of 4096, block sums scanned recursively, `build_scan_add.wgsl`),
 //! the scatter of triangle indices (`build_scatter.wgsl`) and each cell's references sorted
-//! (`build_sort_cells.wgsl`); the occupancy bit of every cell and, for macrocells, of every
-//! macrocell, from the cell table (`build_occupancy.wgsl` with A = 1 and A; per candidate A
-//! when the cost model chooses A, as on the CPU).
+//! (`build_sort_cells.wgsl`); the compact layout the trace kernels read, as
+//! `FlatGrid::new` makes it (`build_cell_bits.wgsl`: an occupancy word per 32 cells and its count,
+//! scanned into ranks; `build_compact.wgsl`: the occupied cells' offsets); for macrocells, the
+//! occupancy bits from the occupancy words (`build_occupancy.wgsl`, per candidate A when the
+//! cost model chooses A, as on the CPU).
 //! Insertion is by bounding box with the conservative margin, the same f32 rule as
 //! `gridrt_grid::insert::box_cell_range`; the resolution is chosen on the CPU from the GPU's
 //! bounds (the cost model samples triangles). The result is a [`GpuStructure`] the trace and

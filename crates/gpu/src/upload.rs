@@ -79,24 +79,16 @@ impl GpuStructure {
             ..GridParams::default()
         };
         let none = wgpu::BufferUsages::empty();
-        // The flat grids' kernels read the table of M + 1 offsets (the CPU keeps only the
-        // occupied cells' offsets).
-        let fine = match grid {
-            AnyGrid::Flat(f) => Some(f),
-            AnyGrid::Macrocell(m) => Some(&m.fine),
-            AnyGrid::Proximity(p) => Some(&p.grid),
-            _ => None,
-        };
+        // The flat-grid kernels read the CPU's compact arrays: occupancy words, the occupied
+        // cells' offsets, the references.
+        let fine = grid.flat();
         let occupied: Option<Vec<[u32; 2]>> = fine.map(|f| f.occupied.iter().map(|w| [w.bits, w.rank]).collect());
         let (refs, cells, extra): (&[u32], &[u8], Option<Vec<u8>>) = match grid {
             AnyGrid::Flat(f) => (&f.refs, bytemuck::cast_slice(&f.ref_start), None),
             AnyGrid::Macrocell(m) => {
                 params.macro_edge = m.a;
-                (
-                    &m.fine.refs,
-                    bytemuck::cast_slice(&m.fine.ref_start),
-                    Some(bytemuck::cast_slice(&m.occupancy).to_vec()),
-                )
+                let f = &m.fine;
+                (&f.refs, bytemuck::cast_slice(&f.ref_start), Some(bytemuck::cast_slice(&m.occupancy).to_vec()))
             }
             AnyGrid::Proximity(p) => {
                 let mut packed = p.distance.clone();

@@ -130,6 +130,27 @@ impl AnyGrid {
         }
     }
 
+    /// The flat grid a flat, macrocell or proximity grid stands on (`None` for the
+    /// hierarchies): the compact arrays the CPU and GPU kernels read.
+    pub fn flat(&self) -> Option<&FlatGrid> {
+        match self {
+            AnyGrid::Flat(g) => Some(g),
+            AnyGrid::Macrocell(m) => Some(&m.fine),
+            AnyGrid::Proximity(p) => Some(&p.grid),
+            AnyGrid::Multires(_) | AnyGrid::TwoLevel(_) => None,
+        }
+    }
+
+    /// [`AnyGrid::flat`], by value.
+    pub fn into_flat(self) -> Option<FlatGrid> {
+        match self {
+            AnyGrid::Flat(g) => Some(g),
+            AnyGrid::Macrocell(m) => Some(m.fine),
+            AnyGrid::Proximity(p) => Some(p.grid),
+            AnyGrid::Multires(_) | AnyGrid::TwoLevel(_) => None,
+        }
+    }
+
     /// The outermost grid's box and resolution.
     pub fn geometry(&self) -> &GridGeometry {
         match self {
@@ -189,8 +210,9 @@ impl AnyGrid {
         !matches!(self, AnyGrid::Multires(_) | AnyGrid::TwoLevel(_))
     }
 
-    /// A 64-bit FNV-1a hash of the structure's arrays as the GPU reads them: the cell table
-    /// (a flat grid's table of M + 1 offsets, [`FlatGrid::cell_table`], or a hierarchy's cells), then the references, then the kind's extra array
+    /// A 64-bit FNV-1a hash of the structure's arrays: the cell table (a flat grid's table of
+    /// M + 1 offsets, [`FlatGrid::cell_table`], which its compact arrays determine, or a
+    /// hierarchy's cells), then the references, then the kind's extra array
     /// (macrocell occupancy, proximity distances), each as little-endian words. Two builds
     /// (serial or parallel, CPU or GPU) are identical exactly when the digests are, barring a
     /// hash collision.

@@ -68,12 +68,7 @@ impl BuildScratch {
     /// Takes back the arrays of a grid that is no longer needed (the flat grid of a flat,
     /// macrocell or proximity grid; others are dropped).
     pub fn recycle(&mut self, grid: crate::AnyGrid) {
-        let fine = match grid {
-            crate::AnyGrid::Flat(f) => f,
-            crate::AnyGrid::Macrocell(m) => m.fine,
-            crate::AnyGrid::Proximity(p) => p.grid,
-            crate::AnyGrid::Multires(_) | crate::AnyGrid::TwoLevel(_) => return,
-        };
+        let Some(fine) = grid.into_flat() else { return };
         self.refs = fine.refs;
         self.occupied = fine.occupied;
         self.ref_start = fine.ref_start;
