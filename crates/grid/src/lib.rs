@@ -14,6 +14,7 @@ pub mod flat;
 pub mod geometry;
 pub mod hierarchy;
 pub mod insert;
+pub mod irregular;
 pub mod macrocell;
 pub mod mailbox;
 pub mod multires;

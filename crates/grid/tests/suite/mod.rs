@@ -4,5 +4,6 @@ pub mod closest_hit;
 pub mod coherent;
 pub mod common;
 pub mod degenerate;
+pub mod irregular;
 pub mod traversal;
 pub mod triangle;

@@ -1,0 +1,34 @@
+//! The experimental irregular grid (merged and expanded cells of a flat grid) equals brute
+//! force exactly on the procedural scenes, at the auto resolution and at twice it, with and
+//! without expansion and with and without the mailbox.
+
+use glam::Vec3;
+use gridrt_grid::irregular::{IrregularGrid, IrregularOptions};
+use gridrt_grid::{BuildOptions, CostModel, Resolution, build_flat};
+
+use super::common::*;
+
+#[test]
+fn irregular_grid_equals_brute_force() {
+    for (name, g) in procedural_scenes() {
+        let tris: Vec<[Vec3; 3]> = (0..g.mesh.triangle_count()).map(|i| g.mesh.triangle(i)).collect();
+        let rays = mixed_rays(&g.mesh, &g.inside_points, matrix_rays(20_000), 17);
+        let (expected, _) = reference(&tris, &rays);
+        let model = CostModel::memory_aware();
+        let opts = BuildOptions { insert: Default::default(), parallel: true };
+        let (_, choice, _) = build_flat(&tris, Resolution::Auto, &model, opts).unwrap();
+        for scale in [1, 2] {
+            let res = choice.resolution.map(|x| x * scale);
+            let (flat, _, _) = build_flat(&tris, Resolution::Explicit(res), &model, opts).unwrap();
+            for expand in [false, true] {
+                let irr = IrregularGrid::from_flat(&flat, IrregularOptions { expand, ..Default::default() });
+                assert!(irr.cells.len() as u64 <= flat.geom.cell_count(), "{name}: more cells than voxels");
+                for mailbox in [false, true] {
+                    let got: Vec<_> = rays.iter().map(|r| irr.trace(&tris, r, mailbox).0).collect();
+                    let what = format!("{name} irregular x{scale} expand={expand} mailbox={mailbox}");
+                    assert_same_hits(&what, &rays, &expected, &got);
+                }
+            }
+        }
+    }
+}
