@@ -21,16 +21,15 @@
 
 use glam::{UVec3, Vec3};
 use gridrt_scene::{Hit, Ray};
-use serde::{Deserialize, Serialize};
 
 use crate::flat::FlatGrid;
 use crate::geometry::{GridGeometry, linear_index};
-use crate::stats::{RayStats, StructureStats};
+use crate::stats::RayStats;
 use crate::trace::closest_hit::closest_hit;
 
 /// One cell of an irregular grid: a box of voxels `[min, max)` (after expansion) and its
 /// triangles `refs[start..end]`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct IrregularCell {
     pub min: [u16; 3],
@@ -40,7 +39,7 @@ pub struct IrregularCell {
 }
 
 /// How the cells are merged.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IrregularOptions {
     /// The cost of a step relative to a triangle test, in the merge's surface-area cost
     /// `area × (refs + step_cost)`.
@@ -58,7 +57,7 @@ impl Default for IrregularOptions {
     }
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct IrregularGrid {
     /// The voxel grid the cells are made of.
     pub geom: GridGeometry,
@@ -189,6 +188,7 @@ impl IrregularGrid {
                     let split =
                         half_area(ec) * (rc.len() as f32 + step_cost) + half_area(en) * (rn.len() as f32 + step_cost);
                     let merged = |n: usize| half_area(em) * (n as f32 + step_cost);
+                    // The larger list is a lower bound of the union: a cheap reject first.
                     if merged(rc.len().max(rn.len())) <= split && merged(union_len(rc, rn)) <= split {
                         partner = Some(nid);
                     }
@@ -280,22 +280,9 @@ impl IrregularGrid {
         true
     }
 
+    /// Bytes of the voxel map, the cells and the references.
     pub fn memory_bytes(&self) -> u64 {
         (self.voxel_cell.len() * 4 + self.cells.len() * size_of::<IrregularCell>() + self.refs.len() * 4) as u64
-    }
-
-    pub fn stats(&self, triangles: usize) -> StructureStats {
-        let empty = self.cells.iter().filter(|c| c.start == c.end).count() as u64;
-        StructureStats {
-            resolution: self.geom.res.to_array(),
-            nodes: 1,
-            levels: 1,
-            cells: self.cells.len() as u64,
-            empty_cells: empty,
-            refs: self.refs.len() as u64,
-            depth_histogram: vec![1],
-            ..StructureStats::sized(self.memory_bytes(), triangles)
-        }
     }
 
     /// Closest hit: from cell to cell, each left at its box's exit.

@@ -16,12 +16,12 @@ fn irregular_grid_equals_brute_force() {
         let (expected, _) = reference(&tris, &rays);
         let model = CostModel::memory_aware();
         let opts = BuildOptions { insert: Default::default(), parallel: true };
-        let (_, choice, _) = build_flat(&tris, Resolution::Auto, &model, opts).unwrap();
-        for scale in [1, 2] {
-            let res = choice.resolution.map(|x| x * scale);
-            let (flat, _, _) = build_flat(&tris, Resolution::Explicit(res), &model, opts).unwrap();
+        let (auto, choice, _) = build_flat(&tris, Resolution::Auto, &model, opts).unwrap();
+        let twice = choice.resolution.map(|x| x * 2);
+        let (fine, _, _) = build_flat(&tris, Resolution::Explicit(twice), &model, opts).unwrap();
+        for (scale, flat) in [(1, &auto), (2, &fine)] {
             for expand in [false, true] {
-                let irr = IrregularGrid::from_flat(&flat, IrregularOptions { expand, ..Default::default() });
+                let irr = IrregularGrid::from_flat(flat, IrregularOptions { expand, ..Default::default() });
                 assert!(irr.cells.len() as u64 <= flat.geom.cell_count(), "{name}: more cells than voxels");
                 for mailbox in [false, true] {
                     let got: Vec<_> = rays.iter().map(|r| irr.trace(&tris, r, mailbox).0).collect();
