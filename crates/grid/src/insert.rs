@@ -4,6 +4,11 @@
 //! [`INSERT_MARGIN_CELLS`](crate::geometry::INSERT_MARGIN_CELLS) of the triangle is included,
 //! and the exact test runs in f64 against the enlarged cell.
 //!
+//! The cells of one row (fixed y and z) that a triangle overlaps are a run: the distance from a
+//! cell's center to the (convex) triangle is a convex function along the row, so the centers
+//! within the enlarged half size form an interval. Exact insertion therefore tests each row
+//! inward from both ends and takes the cells between its first and last overlap untested.
+//!
 //! Zero-area triangles are inserted like any other: three collinear points can round to a
 //! sliver of non-zero area in the f32 shear of the watertight test, and the brute-force
 //! reference would then hit them, so skipping them would break bit-exact agreement.
@@ -137,18 +142,28 @@ pub fn for_each_cell_in_layers(
     if mode == InsertMode::BoundingBox {
         return for_each_box_cell_in_layers(geom, [g.lo, g.hi], layers, f);
     }
-    let single = g.lo == g.hi;
     let mut n = 0;
-    for z in g.lo.z.max(layers.start)..=g.hi.z.min(layers.end.saturating_sub(1)) {
+    let z_range = g.lo.z.max(layers.start)..=g.hi.z.min(layers.end.saturating_sub(1));
+    if g.lo == g.hi {
+        for z in z_range {
+            f(geom.cell_index(UVec3::new(g.lo.x, g.lo.y, z)));
+            n += 1;
+        }
+        return n;
+    }
+    let test = OverlapTest::new(&g.v, 0.5 + g.margin);
+    let overlaps = |x: u32, y: u32, z: u32| test.overlaps(UVec3::new(x, y, z).as_dvec3() + DVec3::splat(0.5));
+    for z in z_range {
         for y in g.lo.y..=g.hi.y {
-            for x in g.lo.x..=g.hi.x {
-                let c = UVec3::new(x, y, z);
-                if !single && !tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + g.margin) {
-                    continue;
-                }
-                f(geom.cell_index(c));
-                n += 1;
+            // The row's overlapped cells are a run (see the module doc): its first and last
+            // are found by testing inward from both ends, and the cells between are taken.
+            let Some(x0) = (g.lo.x..=g.hi.x).find(|&x| overlaps(x, y, z)) else { continue };
+            let x1 = (x0 + 1..=g.hi.x).rev().find(|&x| overlaps(x, y, z)).unwrap_or(x0);
+            let row = geom.cell_index(UVec3::new(x0, y, z));
+            for c in row..=row + (x1 - x0) as usize {
+                f(c);
             }
+            n += x1 - x0 + 1;
         }
     }
     n
@@ -191,37 +206,62 @@ pub fn cell_count(geom: &GridGeometry, g: &GridTriangle, mode: InsertMode) -> u6
 /// Separating-axis triangle/box overlap test (Akenine-Möller), box = cube at `c` with half
 /// size `h`. Touching counts as overlap.
 pub fn tri_box_overlap(tri: &[DVec3; 3], c: DVec3, h: f64) -> bool {
-    let v0 = tri[0] - c;
-    let v1 = tri[1] - c;
-    let v2 = tri[2] - c;
-    let e = [v1 - v0, v2 - v1, v0 - v2];
-    // 9 axes: box axis × triangle edge.
-    for edge in e {
-        for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
-            let a = axis.cross(edge);
-            if a == DVec3::ZERO {
-                continue;
-            }
-            let p0 = a.dot(v0);
-            let p1 = a.dot(v1);
-            let p2 = a.dot(v2);
-            let r = h * (a.x.abs() + a.y.abs() + a.z.abs());
-            if p0.min(p1).min(p2) > r || p0.max(p1).max(p2) < -r {
-                return false;
+    OverlapTest::new(tri, h).overlaps(c)
+}
+
+/// The separating-axis test of one triangle against cubes of half size `h`, with what depends
+/// on the triangle alone computed once (per axis: the triangle's projected interval and the
+/// cube's projected radius), so that a cube costs a dot product and two comparisons per axis.
+/// The axes: the nine edge × box-axis cross products (zero ones skipped), the triangle's normal
+/// (its interval a single value) and, first, the box axes (the triangle's bounding box).
+struct OverlapTest {
+    lo: DVec3,
+    hi: DVec3,
+    h: f64,
+    /// Axis, the triangle's projected interval [min, max], the cube's projected radius.
+    axes: [(DVec3, f64, f64, f64); 10],
+    n: usize,
+}
+
+impl OverlapTest {
+    #[inline]
+    fn new(v: &[DVec3; 3], h: f64) -> OverlapTest {
+        let e = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+        let mut axes = [(DVec3::ZERO, 0.0, 0.0, 0.0); 10];
+        let mut n = 0;
+        let radius = |a: DVec3| h * (a.x.abs() + a.y.abs() + a.z.abs());
+        for edge in e {
+            for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+                let a = axis.cross(edge);
+                if a == DVec3::ZERO {
+                    continue;
+                }
+                let p = [a.dot(v[0]), a.dot(v[1]), a.dot(v[2])];
+                axes[n] = (a, p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]), radius(a));
+                n += 1;
             }
         }
+        // The plane: the cube's center within its projected radius of the plane (a degenerate
+        // triangle's zero normal never separates).
+        let normal = e[0].cross(e[1]);
+        let d = normal.dot(v[0]);
+        axes[n] = (normal, d, d, radius(normal));
+        n += 1;
+        OverlapTest { lo: v[0].min(v[1]).min(v[2]), hi: v[0].max(v[1]).max(v[2]), h, axes, n }
     }
-    // Box face normals: the triangle's bounding box against the box.
-    let mn = v0.min(v1).min(v2);
-    let mx = v0.max(v1).max(v2);
-    if mn.x > h || mn.y > h || mn.z > h || mx.x < -h || mx.y < -h || mx.z < -h {
-        return false;
+
+    /// Whether the cube at `c` overlaps (or touches) the triangle.
+    #[inline]
+    fn overlaps(&self, c: DVec3) -> bool {
+        let (lo, hi, h) = (self.lo - c, self.hi - c, self.h);
+        if lo.x > h || lo.y > h || lo.z > h || hi.x < -h || hi.y < -h || hi.z < -h {
+            return false;
+        }
+        self.axes[..self.n].iter().all(|&(a, min, max, r)| {
+            let ac = a.dot(c);
+            !(min - ac > r || max - ac < -r)
+        })
     }
-    // Triangle plane.
-    let n = e[0].cross(e[1]);
-    let d = n.dot(v0);
-    let r = h * (n.x.abs() + n.y.abs() + n.z.abs());
-    d.abs() <= r
 }
 
 #[cfg(test)]

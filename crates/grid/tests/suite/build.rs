@@ -70,6 +70,53 @@ fn exact_insertion_is_a_subset_of_bbox_insertion_and_covers_the_triangle() {
     }
 }
 
+/// Exact insertion takes each row's cells between its first and last overlap untested (they
+/// form a run): the cells equal those of the overlap test run cell by cell over the triangle's
+/// whole range, on slivers, large triangles at every slant across many cells, and particles.
+#[test]
+fn exact_insertion_rows_equal_the_cell_by_cell_test() {
+    use glam::{DVec3, UVec3};
+    use gridrt_grid::geometry::INSERT_MARGIN_CELLS;
+    use gridrt_grid::insert::{for_each_cell, prepare};
+    let mut tris = tris_of(SceneKind::Slivers, 1500);
+    tris.extend(tris_of(SceneKind::Particles, 1500));
+    // Large triangles through the grid at many slants (a deterministic spread of corners).
+    let mut h = 0x2545_f491u32;
+    let mut next = || {
+        h ^= h << 13;
+        h ^= h >> 17;
+        h ^= h << 5;
+        (h % 10_000) as f32 / 10_000.0
+    };
+    for _ in 0..300 {
+        tris.push(std::array::from_fn(|_| Vec3::new(next(), next(), next())));
+    }
+    let geom = GridGeometry::new(&triangle_bounds(&tris), [29, 31, 23]);
+    let (mut cells, mut tested) = (0u64, 0u64);
+    for t in &tris {
+        let g = prepare(&geom, t, INSERT_MARGIN_CELLS);
+        let mut rows = Vec::new();
+        for_each_cell(&geom, &g, InsertMode::Exact, |c| rows.push(c));
+        let mut each = Vec::new();
+        for z in g.lo.z..=g.hi.z {
+            for y in g.lo.y..=g.hi.y {
+                for x in g.lo.x..=g.hi.x {
+                    let c = UVec3::new(x, y, z);
+                    let single = g.lo == g.hi;
+                    if single || tri_box_overlap(&g.v, c.as_dvec3() + DVec3::splat(0.5), 0.5 + g.margin) {
+                        each.push(geom.cell_index(c));
+                    }
+                }
+            }
+        }
+        assert_eq!(rows, each, "{t:?}");
+        cells += rows.len() as u64;
+        tested += ((g.hi - g.lo + UVec3::ONE).as_u64vec3()).element_product();
+    }
+    // The large triangles make many rows of long runs.
+    assert!(cells > 20_000 && cells * 4 < tested, "{cells} cells of {tested} candidates");
+}
+
 #[test]
 fn tri_box_overlap_matches_known_cases() {
     use glam::DVec3;

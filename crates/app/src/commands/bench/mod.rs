@@ -18,7 +18,9 @@ pub mod targets;
 use glam::Vec3;
 use gridrt_gpu::GpuContext;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, PacketOptions, Resolution, Traversal, structure};
+use gridrt_grid::{
+    AnyGrid, CostModel, GridConfig, GridKind, InsertMode, PacketOptions, Resolution, Traversal, structure,
+};
 use gridrt_scene::{Hit, Ray};
 use serde::Serialize;
 
@@ -62,18 +64,21 @@ pub struct Row {
     pub blind_near: u64,
 }
 
-/// A structure under test: a grid kind or (with the `peers` feature) a peer configuration.
+/// A structure under test: a grid kind with an insertion mode, or (with the `peers` feature) a
+/// peer configuration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Subject {
-    Grid(GridKind),
+    Grid(GridKind, InsertMode),
     #[cfg(feature = "peers")]
     Peer(peers::PeerKind),
 }
 
 impl Subject {
+    /// Every grid kind with bounding-box insertion, then every kind with exact insertion (fewer
+    /// references, so fewer tests per ray and fewer bytes, at a slower build), then the peers.
     pub fn all(with_peers: bool) -> Vec<Subject> {
-        #[cfg_attr(not(feature = "peers"), allow(unused_mut))]
-        let mut v: Vec<Subject> = GridKind::ALL.iter().map(|&k| Subject::Grid(k)).collect();
+        let mut v: Vec<Subject> =
+            InsertMode::ALL.iter().flat_map(|&m| GridKind::ALL.iter().map(move |&k| Subject::Grid(k, m))).collect();
         #[cfg(feature = "peers")]
         if with_peers {
             v.extend(peers::PeerKind::ALL.iter().map(|&p| Subject::Peer(p)));
@@ -83,14 +88,14 @@ impl Subject {
     }
     pub fn parallel_build(self) -> bool {
         match self {
-            Subject::Grid(_) => true,
+            Subject::Grid(..) => true,
             #[cfg(feature = "peers")]
             Subject::Peer(p) => p.parallel_build(),
         }
     }
     pub fn shared_test(self) -> bool {
         match self {
-            Subject::Grid(_) => true,
+            Subject::Grid(..) => true,
             #[cfg(feature = "peers")]
             Subject::Peer(p) => p.shared_test(),
         }
@@ -98,14 +103,15 @@ impl Subject {
     /// The distance before which the structure cannot see hits, when it has one.
     pub fn blind_distance(self) -> Option<f32> {
         match self {
-            Subject::Grid(_) => None,
+            Subject::Grid(..) => None,
             #[cfg(feature = "peers")]
             Subject::Peer(p) => p.blind_distance(),
         }
     }
     pub fn name(self) -> String {
         match self {
-            Subject::Grid(k) => k.name().to_string(),
+            Subject::Grid(k, InsertMode::BoundingBox) => k.name().to_string(),
+            Subject::Grid(k, InsertMode::Exact) => format!("{}, exact", k.name()),
             #[cfg(feature = "peers")]
             Subject::Peer(p) => p.name().to_string(),
         }
@@ -141,8 +147,9 @@ enum Built {
 
 fn build(subject: Subject, tris: &[[Vec3; 3]], cost: &CostModel) -> anyhow::Result<Built> {
     Ok(match subject {
-        Subject::Grid(kind) => {
-            let cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
+        Subject::Grid(kind, insert) => {
+            let mut cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
+            cfg.build.insert = insert;
             let (g, report) = structure::build(tris, &cfg)?;
             Built::Grid(g, report.stats.memory_bytes)
         }
@@ -223,7 +230,7 @@ fn bench_scene(
         let memory = built.memory_bytes();
         let mut single = Measured {
             structure: subject.name(),
-            family: if matches!(subject, Subject::Grid(_)) { "grid" } else { "peer" },
+            family: if matches!(subject, Subject::Grid(..)) { "grid" } else { "peer" },
             subject,
             build_s,
             memory,

@@ -44,7 +44,7 @@ pub fn cases(args: &BenchArgs) -> Vec<(&'static str, Vec<[Vec3; 3]>)> {
 /// The subjects whose build is scaled: the flat grid and the peers' fastest builds.
 fn subjects(args: &BenchArgs) -> Vec<Subject> {
     #[cfg_attr(not(feature = "peers"), allow(unused_mut))]
-    let mut v = vec![Subject::Grid(gridrt_grid::GridKind::Flat)];
+    let mut v = vec![Subject::Grid(gridrt_grid::GridKind::Flat, gridrt_grid::InsertMode::BoundingBox)];
     #[cfg(feature = "peers")]
     if !args.no_peers {
         v.push(Subject::Peer(super::peers::PeerKind::Bvh));
@@ -65,8 +65,9 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<ScalePoint>
             pb.set_message(format!("{} · {n} triangles", s.name()));
             let (secs, r) = best_of(args.repeat as usize, || -> anyhow::Result<()> {
                 match s {
-                    Subject::Grid(kind) => {
-                        let cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
+                    Subject::Grid(kind, insert) => {
+                        let mut cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
+                        cfg.build.insert = insert;
                         structure::build(tris, &cfg)?;
                     }
                     #[cfg(feature = "peers")]
