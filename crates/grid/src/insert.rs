@@ -153,12 +153,23 @@ pub fn for_each_cell_in_layers(
     }
     let test = OverlapTest::new(&g.v, 0.5 + g.margin);
     let overlaps = |x: u32, y: u32, z: u32| test.overlaps(UVec3::new(x, y, z).as_dvec3() + DVec3::splat(0.5));
+    let large = g.hi.x - g.lo.x >= BOUNDED_ROWS_FROM;
     for z in z_range {
         for y in g.lo.y..=g.hi.y {
             // The row's overlapped cells are a run (see the module doc): its first and last
-            // are found by testing inward from both ends, and the cells between are taken.
-            let Some(x0) = (g.lo.x..=g.hi.x).find(|&x| overlaps(x, y, z)) else { continue };
-            let x1 = (x0 + 1..=g.hi.x).rev().find(|&x| overlaps(x, y, z)).unwrap_or(x0);
+            // are found by testing inward from both ends, and the cells between are taken. A
+            // large triangle's row starts from the bounds the test's axes put on the run.
+            let (mut x0, mut x1) = (g.lo.x, g.hi.x);
+            if large {
+                let Some((a, b)) = test.row_bounds(y as f64 + 0.5, z as f64 + 0.5) else { continue };
+                let (a, b) = ((a - 0.5).floor().max(x0 as f64), (b - 0.5).ceil().min(x1 as f64));
+                if a > b {
+                    continue;
+                }
+                (x0, x1) = (a as u32, b as u32);
+            }
+            let Some(x0) = (x0..=x1).find(|&x| overlaps(x, y, z)) else { continue };
+            let x1 = (x0 + 1..=x1).rev().find(|&x| overlaps(x, y, z)).unwrap_or(x0);
             let row = geom.cell_index(UVec3::new(x0, y, z));
             for c in row..=row + (x1 - x0) as usize {
                 f(c);
@@ -168,6 +179,11 @@ pub fn for_each_cell_in_layers(
     }
     n
 }
+
+/// Candidate rows of more cells than this are bounded by [`OverlapTest::row_bounds`] before
+/// testing: the scan from a row's ends costs a test per cell outside the run (for a large
+/// slanted triangle, most of the row), the bounds about as much as a few tests.
+const BOUNDED_ROWS_FROM: u32 = 16;
 
 /// Bounding-box insertion of the cell range `[lo, hi]` (a [`prepare`]d triangle's), in the
 /// z layers `layers`: `f(cell_index)` in increasing order; returns how many.
@@ -250,6 +266,43 @@ impl OverlapTest {
         OverlapTest { lo: v[0].min(v[1]).min(v[2]), hi: v[0].max(v[1]).max(v[2]), h, axes, n }
     }
 
+    /// Bounds on the centers' x of the cubes at (·, `cy`, `cz`) that overlap the triangle, or
+    /// `None` when none does. Each axis' condition is linear in the center's x, so it holds on
+    /// an interval, and the run of overlapping cubes lies in their intersection. The bounds
+    /// are widened by [`ROW_SLACK`] (far above their rounding), and an axis that hardly depends
+    /// on x (where solving for x would amplify the rounding) bounds nothing, so no cube that
+    /// [`OverlapTest::overlaps`] accepts is ever outside them. A row is refused outright only
+    /// by conditions that do not depend on x, evaluated as `overlaps` evaluates them.
+    #[inline]
+    fn row_bounds(&self, cy: f64, cz: f64) -> Option<(f64, f64)> {
+        let h = self.h;
+        let (ly, lz, hy, hz) = (self.lo.y - cy, self.lo.z - cz, self.hi.y - cy, self.hi.z - cz);
+        if ly > h || lz > h || hy < -h || hz < -h {
+            return None;
+        }
+        let (mut lo, mut hi) = (self.lo.x - h, self.hi.x + h);
+        for &(a, min, max, r) in &self.axes[..self.n] {
+            if a.x == 0.0 {
+                // The same operations as `overlaps` (its x term is an exact zero).
+                let ac = a.dot(DVec3::new(0.0, cy, cz));
+                if min - ac > r || max - ac < -r {
+                    return None;
+                }
+                continue;
+            }
+            if a.x.abs() < 1e-3 * (a.y.abs() + a.z.abs()) {
+                continue;
+            }
+            // min − a·c ≤ r and max − a·c ≥ −r, with a·c = a.x·x + rest.
+            let rest = a.y * cy + a.z * cz;
+            let (p, q) = ((min - r - rest) / a.x, (max + r - rest) / a.x);
+            let (p, q) = if a.x > 0.0 { (p, q) } else { (q, p) };
+            lo = lo.max(p);
+            hi = hi.min(q);
+        }
+        Some((lo - ROW_SLACK, hi + ROW_SLACK))
+    }
+
     /// Whether the cube at `c` overlaps (or touches) the triangle.
     #[inline]
     fn overlaps(&self, c: DVec3) -> bool {
@@ -263,6 +316,9 @@ impl OverlapTest {
         })
     }
 }
+
+/// How far (in cells) [`OverlapTest::row_bounds`] widens its bounds.
+const ROW_SLACK: f64 = 1e-6;
 
 #[cfg(test)]
 mod tests {
