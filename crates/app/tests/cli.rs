@@ -701,7 +701,7 @@ fn app_screenshots_under_xvfb() {
     assert!(err.contains("app-bad.glb"), "the error names the file: {err}");
 }
 
-/// `gridrt bench --quick --procedural`: every grid kind and every peer BVH on two scenes, with
+/// `gridrt bench --quick --procedural`: every grid kind (both insertion modes) and every peer BVH on two scenes, with
 /// hits that agree with the flat grid's, the scaling run and the targets, as JSON and files.
 #[test]
 fn bench_compares_grids_and_peers_on_the_same_rays() {
@@ -717,16 +717,20 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
     let structures: Vec<&str> = rows.iter().map(|r| r["structure"].as_str().unwrap()).collect();
     for name in ["flat", "macrocell", "multires", "twolevel", "proximity", "bvh (build_par)", "obvhs BVH2 fastest"] {
         assert!(structures.contains(&name), "{name} missing from {structures:?}");
+        if !name.contains(' ') {
+            let exact = format!("{name}, exact");
+            assert!(structures.contains(&exact.as_str()), "{exact} missing from {structures:?}");
+        }
     }
-    // 5 grids + 5 peer configurations per scene and ray set, and on the camera sets 3 rows of
-    // packets (flat, macrocell, proximity).
+    // 5 grids with each insertion mode + 5 peer configurations per scene and ray set, and on the
+    // camera sets 6 rows of packets (flat, macrocell, proximity; each insertion mode).
     for set in ["framed", "random"] {
         let of_set: Vec<_> = rows.iter().filter(|r| r["rays"] == set).collect();
         let packets = of_set.iter().filter(|r| r["family"] == "grid packets").count();
         assert!(!of_set.is_empty(), "no {set} rows");
         let scenes = 2;
-        let want = if set == "random" { 0 } else { 3 * scenes };
-        assert_eq!((of_set.len(), packets), (10 * scenes + want, want), "{set} rows");
+        let want = if set == "random" { 0 } else { 6 * scenes };
+        assert_eq!((of_set.len(), packets), (15 * scenes + want, want), "{set} rows");
     }
     assert!(structures.contains(&"flat, 8×8 packets"), "{structures:?}");
     for r in rows {
