@@ -77,6 +77,7 @@ impl Subject {
     /// Every grid kind with bounding-box insertion, then every kind with exact insertion (fewer
     /// references, so fewer tests per ray and fewer bytes, at a slower build), then the peers.
     pub fn all(with_peers: bool) -> Vec<Subject> {
+        #[cfg_attr(not(feature = "peers"), allow(unused_mut))]
         let mut v: Vec<Subject> =
             InsertMode::ALL.iter().flat_map(|&m| GridKind::ALL.iter().map(move |&k| Subject::Grid(k, m))).collect();
         #[cfg(feature = "peers")]

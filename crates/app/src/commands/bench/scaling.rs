@@ -6,7 +6,7 @@
 //! to linear each build is (1 = linear).
 
 use glam::Vec3;
-use gridrt_grid::{CostModel, GridConfig, structure};
+use gridrt_grid::CostModel;
 use gridrt_scene::procedural;
 use serde::Serialize;
 
@@ -63,20 +63,7 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<ScalePoint>
         let (scene, tris, n) = (*scene, tris.as_slice(), tris.len());
         for &s in &subjects {
             pb.set_message(format!("{} · {n} triangles", s.name()));
-            let (secs, r) = best_of(args.repeat as usize, || -> anyhow::Result<()> {
-                match s {
-                    Subject::Grid(kind, insert) => {
-                        let mut cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
-                        cfg.build.insert = insert;
-                        structure::build(tris, &cfg)?;
-                    }
-                    #[cfg(feature = "peers")]
-                    Subject::Peer(p) => {
-                        super::peers::build(p, tris);
-                    }
-                }
-                Ok(())
-            });
+            let (secs, r) = best_of(args.repeat as usize, || super::build(s, tris, cost).map(drop));
             r?;
             out.push(ScalePoint {
                 scene,
