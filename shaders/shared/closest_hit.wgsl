@@ -7,7 +7,8 @@
 // the ray and clips it to the grid, calls the structure's `walk` (defined by the kernel file
 // that includes this one), and writes the hit and counters. `walk` visits the structure's cells
 // in order of increasing t, hands each leaf's references to `test_cell` and returns when it says
-// the search is done (the best hit lies before the cell's exit).
+// the search is done (the best hit lies before the cell's exit; for an occlusion query,
+// params.query == QUERY_ANY, as soon as there is a hit).
 
 // One invocation's search: its ray, best hit so far (by t, then triangle index), counters and
 // mailbox. Private (per-invocation) so every kernel and walker shares them without passing them.
@@ -55,6 +56,10 @@ fn test_cell(first: u32, end: u32, t_exit: f32) -> bool {
     let use_mailbox = params.mailbox != 0u;
     for (var k = first; k < end; k++) {
         test_triangle(refs[k], use_mailbox);
+        // An occlusion query is done at its first hit.
+        if params.query == QUERY_ANY && best.t < inf() {
+            return true;
+        }
     }
     return done_at(t_exit);
 }

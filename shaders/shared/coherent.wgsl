@@ -255,8 +255,9 @@ fn trace_packets(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
             }
             test_box(lo, hi, own_lo, own_hi);
         }
-        // This ray stops after its last slice, or once its best hit lies in a slice visited.
-        if j >= last {
+        // This ray stops after its last slice, or once its best hit lies in a slice visited
+        // (an occlusion query: once it has a hit).
+        if j >= last || (params.query == QUERY_ANY && best.t < inf()) {
             walking = false;
         } else if best.t < inf() {
             let s = g.o[axis] + g.d[axis] * best.t;

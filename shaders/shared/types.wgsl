@@ -54,5 +54,14 @@ struct Params {
     first_ray: u32,
     // Pixels per row of the image the rays form (the packet kernels).
     image_width: u32,
+    // What the search looks for: QUERY_CLOSEST or QUERY_ANY (occlusion).
+    query: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
+
+// Params.query (Rust: layout.rs QUERY_CLOSEST, QUERY_ANY).
+const QUERY_CLOSEST: u32 = 0u;
+const QUERY_ANY: u32 = 1u;
 

@@ -6,7 +6,7 @@
 //! Everything is vec4-aligned: no bare vec3 in storage.
 
 use bytemuck::{Pod, Zeroable};
-use gridrt_grid::RayStats;
+use gridrt_grid::{Query, RayStats};
 use gridrt_scene::Hit;
 
 /// Bytes per record of the per-ray buffers, from the structs below (one place for every
@@ -45,6 +45,24 @@ pub struct GridParams {
     pub first_ray: u32,
     /// Pixels per row of the image the rays form (the packet kernels; 0 for other rays).
     pub image_width: u32,
+    /// What the search looks for: [`QUERY_CLOSEST`] or [`QUERY_ANY`] (occlusion).
+    pub query: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+/// `GridParams::query`: the closest hit (WGSL `QUERY_CLOSEST`).
+pub const QUERY_CLOSEST: u32 = 0;
+/// `GridParams::query`: any hit, the search ends at the first (WGSL `QUERY_ANY`).
+pub const QUERY_ANY: u32 = 1;
+
+/// The `GridParams::query` of a [`Query`].
+pub fn query_code(q: Query) -> u32 {
+    match q {
+        Query::Closest => QUERY_CLOSEST,
+        Query::Any => QUERY_ANY,
+    }
 }
 
 /// One grid of a hierarchy: xyz = resolution, w = first cell. WGSL `Node`.

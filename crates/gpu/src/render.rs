@@ -11,12 +11,12 @@
 //! (the app), a last pass (`present.wgsl`) copies each tile's pixels into the full-size texture
 //! and sums the per-ray stats on the GPU, so the app reads back 32 bytes per frame.
 
-use gridrt_grid::{RayStats, Traversal};
+use gridrt_grid::{Query, RayStats, TraceOptions, Traversal};
 use gridrt_scene::{Aabb, Camera, Hit};
 
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
-use crate::layout::{FrameTotals, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams};
+use crate::layout::{FrameTotals, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams, query_code};
 use crate::trace::{TraceJob, Tracer, WORKGROUP, pipeline, read_back, records, walker_for};
 use crate::upload::{GpuScene, GpuStructure};
 use crate::view::View;
@@ -105,6 +105,8 @@ pub struct FrameTarget {
     camera: wgpu::Buffer,
     shade: wgpu::Buffer,
     trace_params: wgpu::Buffer,
+    /// The shadow pass's: the same with `query` any.
+    shadow_params: wgpu::Buffer,
     rays: wgpu::Buffer,
     pub hits: wgpu::Buffer,
     pub stats: wgpu::Buffer,
@@ -166,6 +168,7 @@ impl FrameTarget {
             camera: buf("camera", size_of::<crate::layout::GpuCamera>() as u64, U::UNIFORM | U::COPY_DST),
             shade: buf("shade params", size_of::<ShadeParams>() as u64, U::UNIFORM | U::COPY_DST),
             trace_params: buf("trace params", size_of::<GridParams>() as u64, U::UNIFORM | U::COPY_DST),
+            shadow_params: buf("shadow trace params", size_of::<GridParams>() as u64, U::UNIFORM | U::COPY_DST),
             rays: buf("primary rays (tile)", n * RAY_BYTES, storage),
             hits: buf("primary hits (tile)", n * HIT_BYTES, storage | U::COPY_SRC),
             stats: buf("primary stats (tile)", n * STATS_BYTES, storage | U::COPY_SRC),
@@ -303,8 +306,12 @@ impl Renderer {
         q.write_buffer(&t.camera, 0, bytemuck::bytes_of(&cam));
         let sp = ShadeParams { first_pixel: first, pixel_count: count, ..shade_params(bounds, o) };
         q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&sp));
-        let (tp, image) = crate::trace::dispatch_params(s, (first, count), o.mailbox, o.packets.then_some(o.width));
+        let topts = TraceOptions { traversal: o.traversal, mailbox: o.mailbox, query: Query::Closest };
+        let (tp, image) = crate::trace::dispatch_params(s, (first, count), topts, o.packets.then_some(o.width));
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
+        // Shadow rays ask only whether anything occludes the light: any hit.
+        let sp = GridParams { query: query_code(Query::Any), ..tp };
+        q.write_buffer(&t.shadow_params, 0, bytemuck::bytes_of(&sp));
 
         let groups = count.div_ceil(WORKGROUP);
         let bind = |pipe: &wgpu::ComputePipeline, label, res: &[wgpu::BindingResource]| {
@@ -332,12 +339,11 @@ impl Renderer {
         let (pixels, shade) = (r(&t.pixels, PIXEL_BYTES), b(&t.shade));
         let camera_bg = bind(&self.camera, "camera bind group", &[b(&t.camera), rays.clone(), shade.clone()]);
         run(enc, &self.camera, &camera_bg, "camera rays");
-        let trace = |enc: &mut wgpu::CommandEncoder, rays, hits, stats| {
-            let params = &t.trace_params;
+        let trace = |enc: &mut wgpu::CommandEncoder, params, rays, hits, stats| {
             let job = TraceJob { scene, structure: s, params, rays, hits, stats, count, walker, image };
             self.tracer.encode(ctx, enc, &job)
         };
-        trace(enc, &t.rays, &t.hits, &t.stats)?;
+        trace(enc, &t.trace_params, &t.rays, &t.hits, &t.stats)?;
         if o.view == View::Shaded {
             let shadow_bg = bind(
                 &self.shadow,
@@ -345,7 +351,7 @@ impl Renderer {
                 &[shade.clone(), rays.clone(), hits.clone(), r(&t.shadow_rays, RAY_BYTES)],
             );
             run(enc, &self.shadow, &shadow_bg, "shadow rays");
-            trace(enc, &t.shadow_rays, &t.shadow_hits, &t.shadow_stats)?;
+            trace(enc, &t.shadow_params, &t.shadow_rays, &t.shadow_hits, &t.shadow_stats)?;
         }
         let shade_bg = bind(
             &self.shade,

@@ -6,7 +6,7 @@
 use std::sync::OnceLock;
 
 use glam::Vec3;
-use gridrt_grid::{AnyGrid, RayStats, Traversal};
+use gridrt_grid::{AnyGrid, RayStats, TraceOptions};
 use gridrt_scene::{Aabb, Hit, Ray};
 
 use crate::context::{GpuContext, GpuError};
@@ -42,15 +42,14 @@ impl<'a> GpuSession<'a> {
         GpuStructure::new(self.ctx, grid)
     }
 
-    /// Closest hits and per-ray counters of `rays` through `s` (see [`Tracer::trace`]).
+    /// Closest (or any) hits and per-ray counters of `rays` through `s` (see [`Tracer::trace`]).
     pub fn trace(
         &self,
         s: &GpuStructure,
         rays: &[Ray],
-        traversal: Traversal,
-        mailbox: bool,
+        opts: TraceOptions,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
-        self.tracer.trace(self.ctx, &self.scene, s, rays, traversal, mailbox)
+        self.tracer.trace(self.ctx, &self.scene, s, rays, opts)
     }
 
     /// [`GpuSession::trace`] for the rays of a row-major image `width` pixels wide, in 8×8
@@ -60,10 +59,9 @@ impl<'a> GpuSession<'a> {
         s: &GpuStructure,
         rays: &[Ray],
         width: u32,
-        traversal: Traversal,
-        mailbox: bool,
+        opts: TraceOptions,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
-        self.tracer.trace_image(self.ctx, &self.scene, s, rays, width, traversal, mailbox)
+        self.tracer.trace_image(self.ctx, &self.scene, s, rays, width, opts)
     }
 
     /// Renders one image through `s` and reads it back (see [`Renderer::render`]).

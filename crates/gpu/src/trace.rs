@@ -5,13 +5,13 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use gridrt_grid::{RayStats, Traversal};
+use gridrt_grid::{RayStats, TraceOptions, Traversal};
 use gridrt_scene::{Hit, Ray};
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
 use crate::kernel::{GpuWalker, Kernel};
-use crate::layout::{GpuRay, GridParams, HIT_BYTES, RAY_BYTES, STATS_BYTES};
+use crate::layout::{GpuRay, GridParams, HIT_BYTES, RAY_BYTES, STATS_BYTES, query_code};
 use crate::shaders::compose_with;
 use crate::upload::{GpuScene, GpuStructure};
 
@@ -131,19 +131,21 @@ pub struct ImageRays {
     pub first: u32,
 }
 
-/// The parameters of a dispatch over `count` rays from ray `first` of the whole set, and where
-/// they lie in the image `image_width` pixels wide when they are traced as one (in packets):
-/// the uniform and [`TraceJob::image`] agree by construction.
+/// The parameters of a dispatch over `count` rays from ray `first` of the whole set with the
+/// mailbox and query of `opts`, and where they lie in the image `image_width` pixels wide when
+/// they are traced as one (in packets): the uniform and [`TraceJob::image`] agree by
+/// construction.
 pub fn dispatch_params(
     s: &GpuStructure,
     (first, count): (u32, u32),
-    mailbox: bool,
+    opts: TraceOptions,
     image_width: Option<u32>,
 ) -> (GridParams, Option<ImageRays>) {
     let image = image_width.map(|width| ImageRays { width, first });
     let params = GridParams {
         ray_count: count,
-        mailbox: mailbox as u32,
+        mailbox: opts.mailbox as u32,
+        query: query_code(opts.query),
         first_ray: first,
         image_width: image_width.unwrap_or(0),
         ..s.params
@@ -218,22 +220,21 @@ impl Tracer {
         Ok(())
     }
 
-    /// Traces `rays` and reads back hits and stats (chunked).
+    /// Traces `rays` (closest or any hits, by `opts.query`) and reads back hits and stats
+    /// (chunked).
     pub fn trace(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
         s: &GpuStructure,
         rays: &[Ray],
-        traversal: Traversal,
-        mailbox: bool,
+        opts: TraceOptions,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
-        self.trace_rays(ctx, scene, s, rays, None, (traversal, mailbox))
+        self.trace_rays(ctx, scene, s, rays, None, opts)
     }
 
     /// [`Tracer::trace`] for the rays of a row-major image `width` pixels wide: in 8×8 packets
     /// where the structure has a packet kernel (flat, macrocell), else one ray per invocation.
-    #[allow(clippy::too_many_arguments)]
     pub fn trace_image(
         &self,
         ctx: &GpuContext,
@@ -241,10 +242,9 @@ impl Tracer {
         s: &GpuStructure,
         rays: &[Ray],
         width: u32,
-        traversal: Traversal,
-        mailbox: bool,
+        opts: TraceOptions,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
-        self.trace_rays(ctx, scene, s, rays, Some(width.max(1)), (traversal, mailbox))
+        self.trace_rays(ctx, scene, s, rays, Some(width.max(1)), opts)
     }
 
     fn trace_rays(
@@ -254,7 +254,7 @@ impl Tracer {
         s: &GpuStructure,
         rays: &[Ray],
         width: Option<u32>,
-        (traversal, mailbox): (Traversal, bool),
+        opts: TraceOptions,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
         let limits = ctx.device.limits();
         let max_by_binding = limits.max_storage_buffer_binding_size / std::mem::size_of::<GpuRay>() as u64;
@@ -266,14 +266,14 @@ impl Tracer {
             let by_rows = limits.max_compute_workgroups_per_dimension as usize * band;
             chunk = (chunk.min(by_rows) / band).max(1) * band;
         }
-        let walker = walker_for(traversal)?;
+        let walker = walker_for(opts.traversal)?;
         let n = chunk.min(rays.len().max(1));
         let mut scratch = self.scratch.lock().expect("tracer scratch lock");
         if scratch.as_ref().is_none_or(|b| b.capacity < n) {
             *scratch = Some(Scratch::new(ctx, n));
         }
         let b = scratch.as_ref().expect("scratch buffers were just made");
-        let out = self.trace_chunks(ctx, scene, s, rays, (chunk, width), (walker, mailbox), b);
+        let out = self.trace_chunks(ctx, scene, s, rays, (chunk, width), (walker, opts), b);
         if out.is_err() {
             // A failed readback may leave a buffer mapped: the next call starts afresh.
             *scratch = None;
@@ -290,14 +290,14 @@ impl Tracer {
         s: &GpuStructure,
         rays: &[Ray],
         (chunk, width): (usize, Option<u32>),
-        (walker, mailbox): (GpuWalker, bool),
+        (walker, opts): (GpuWalker, TraceOptions),
         b: &Scratch,
     ) -> Result<(Vec<Hit>, Vec<RayStats>), GpuError> {
         let mut all_hits = Vec::with_capacity(rays.len());
         let mut all_stats = Vec::with_capacity(rays.len());
         for (ci, part) in rays.chunks(chunk).enumerate() {
             let count = part.len() as u32;
-            let (p, image) = dispatch_params(s, ((ci * chunk) as u32, count), mailbox, width);
+            let (p, image) = dispatch_params(s, ((ci * chunk) as u32, count), opts, width);
             ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
             ctx.queue.write_buffer(&b.rays, 0, bytemuck::cast_slice(part));
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });

@@ -39,6 +39,7 @@ use serde::{Deserialize, Serialize};
 use crate::geometry::{GridGeometry, GridRay, INSERT_MARGIN_CELLS};
 use crate::stats::RayStats;
 use crate::stats::{HierarchyStats, StructureStats};
+use crate::trace::TraceOptions;
 use crate::trace::closest_hit::ClosestHit;
 use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, walk};
@@ -171,8 +172,9 @@ impl Hierarchy {
     }
 
     /// Closest hit (see the module doc).
-    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
-        closest_hit(tris, ray, mailbox, |search| {
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
+        let traversal = opts.traversal;
+        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
             if let Some(top) = self.geom.clip(&search.ray) {
                 self.walk_node(0, &top, traversal, search);
             }

@@ -25,6 +25,7 @@ use gridrt_scene::{Hit, Ray};
 use crate::flat::FlatGrid;
 use crate::geometry::{GridGeometry, linear_index};
 use crate::stats::RayStats;
+use crate::trace::TraceOptions;
 use crate::trace::closest_hit::closest_hit;
 
 /// One cell of an irregular grid: a box of voxels `[min, max)` (after expansion) and its
@@ -286,8 +287,8 @@ impl IrregularGrid {
     }
 
     /// Closest hit: from cell to cell, each left at its box's exit.
-    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, mailbox: bool) -> (Hit, RayStats) {
-        closest_hit(tris, ray, mailbox, |search| {
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
+        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
             let Some(gr) = self.geom.clip(&search.ray) else { return };
             let res = self.geom.res;
             let up = gr.d.cmpgt(Vec3::ZERO);

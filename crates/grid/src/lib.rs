@@ -40,7 +40,7 @@ pub use insert::InsertMode;
 pub use resolution::{CostModel, Resolution, ResolutionChoice};
 pub use stats::{BatchStats, HierarchyStats, RayStats, StructureStats};
 pub use structure::{AnyGrid, BuildReport, GridConfig, GridKind};
-pub use trace::TraceOptions;
+pub use trace::{Query, TraceOptions};
 pub use traversal::Traversal;
 
 #[derive(Debug, Error, PartialEq)]

@@ -27,6 +27,7 @@ use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
 use crate::geometry::{GridGeometry, GridRay, linear_index};
 use crate::stats::RayStats;
+use crate::trace::TraceOptions;
 use crate::trace::closest_hit::{ClosestHit, closest_hit};
 use crate::traversal::{Traversal, walk};
 
@@ -114,8 +115,9 @@ impl MacrocellGrid {
     }
 
     /// Closest hit: macro walk, fine walk inside occupied macrocells.
-    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
-        closest_hit(tris, ray, mailbox, |search| {
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
+        let traversal = opts.traversal;
+        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
             let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
             let a = self.a as f32;
             // Exact: A is a power of two.

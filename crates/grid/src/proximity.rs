@@ -19,8 +19,9 @@ use serde::{Deserialize, Serialize};
 use crate::flat::FlatGrid;
 use crate::geometry::GridRay;
 use crate::stats::RayStats;
+use crate::trace::TraceOptions;
 use crate::trace::closest_hit::closest_hit;
-use crate::traversal::{Traversal, walk};
+use crate::traversal::walk;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProximityGrid {
@@ -40,8 +41,9 @@ impl ProximityGrid {
     }
 
     /// Closest hit; empty cells with distance ≥ 2 are skipped in one jump (counted as one cell).
-    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, traversal: Traversal, mailbox: bool) -> (Hit, RayStats) {
-        closest_hit(tris, ray, mailbox, |search| {
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
+        let traversal = opts.traversal;
+        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
             let Some(mut gr) = self.grid.geom.clip(&search.ray) else { return };
             let res = self.grid.geom.res;
             loop {

@@ -164,9 +164,9 @@ impl AnyGrid {
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
         match self {
             AnyGrid::Flat(g) => trace_flat(g, tris, ray, opts),
-            AnyGrid::Macrocell(g) => g.trace(tris, ray, opts.traversal, opts.mailbox),
-            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => h.trace(tris, ray, opts.traversal, opts.mailbox),
-            AnyGrid::Proximity(p) => p.trace(tris, ray, opts.traversal, opts.mailbox),
+            AnyGrid::Macrocell(g) => g.trace(tris, ray, opts),
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => h.trace(tris, ray, opts),
+            AnyGrid::Proximity(p) => p.trace(tris, ray, opts),
         }
     }
 
@@ -180,7 +180,7 @@ impl AnyGrid {
         trace_batch(rays, parallel, |r| self.trace(tris, r, opts))
     }
 
-    /// Closest hits of an image's rays (`rays` row-major, `width` per row) in packets of
+    /// Closest hits (or any hits, by `opts.query`) of an image's rays (`rays` row-major, `width` per row) in packets of
     /// coherent rays ([`crate::coherent`]): the flat grid, the macrocell grid (empty macrocells
     /// skipped per slice) and the proximity grid's cells walk slice by slice; the hierarchies
     /// trace single rays (no packets). Hits are those of [`AnyGrid::trace_batch`], bit for bit.
@@ -195,9 +195,11 @@ impl AnyGrid {
     ) -> (Vec<Hit>, BatchStats, PacketStats) {
         let single = |r: &Ray| self.trace(tris, r, opts);
         match self {
-            AnyGrid::Flat(g) => coherent::trace_image(g, tris, rays, width, packets, parallel, single),
-            AnyGrid::Proximity(p) => coherent::trace_image(&p.grid, tris, rays, width, packets, parallel, single),
-            AnyGrid::Macrocell(g) => coherent::trace_image(g, tris, rays, width, packets, parallel, single),
+            AnyGrid::Flat(g) => coherent::trace_image(g, tris, rays, width, packets, opts.query, parallel, single),
+            AnyGrid::Proximity(p) => {
+                coherent::trace_image(&p.grid, tris, rays, width, packets, opts.query, parallel, single)
+            }
+            AnyGrid::Macrocell(g) => coherent::trace_image(g, tris, rays, width, packets, opts.query, parallel, single),
             AnyGrid::Multires(_) | AnyGrid::TwoLevel(_) => {
                 let (hits, stats) = self.trace_batch(tris, rays, opts, parallel);
                 (hits, stats, PacketStats::default())

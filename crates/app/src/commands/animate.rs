@@ -109,11 +109,11 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         // shades after the timing).
         let (primary_hits, shadowed, traced, rgba) = match &ctx {
             None => {
-                let trace =
-                    |rays| crate::lab::frame::trace_frame(&grid, tris, rays, width as usize, trace_opts, packets);
-                let (hits, st, _) = trace(primary);
+                let trace = |rays, o| crate::lab::frame::trace_frame(&grid, tris, rays, width as usize, o, packets);
+                let (hits, st, _) = trace(primary, trace_opts);
                 crate::lab::frame::shadow_rays_from_hits(shade, primary, &hits, &mut shadow);
-                let (shadow_hits, sst, _) = trace(&shadow);
+                // Shadow rays as occlusion queries (any hit).
+                let (shadow_hits, sst, _) = trace(&shadow, trace_opts.occlusion());
                 let traced = Instant::now();
                 let rgba = args
                     .frames_dir

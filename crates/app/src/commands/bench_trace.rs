@@ -22,7 +22,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let ctx = super::gpu_context()?;
     let gpu = GpuSession::new(&ctx, &tris, b)?;
     let gs = gpu.upload(&grid)?;
-    let opts = TraceOptions { traversal: args.traversal, mailbox: true };
+    let opts = TraceOptions { traversal: args.traversal, mailbox: true, ..Default::default() };
     // Camera rays as whole 4:3 images of about `--rays` pixels, so packets tile them.
     let (width, height) = image_size(args.rays, 4.0 / 3.0);
     let framed = crate::lab::views::framed_camera(&tris, &b, &grid, width as f32 / height as f32);
@@ -51,7 +51,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     };
     // Warm-up on a whole set: compiles the pipeline and sizes the tracer's buffers, which a
     // few rays do not (the first full-size call also paid ~0.2 s on lavapipe).
-    gpu.trace(&gs, &sets[0].1, args.traversal, true)?;
+    gpu.trace(&gs, &sets[0].1, opts)?;
     let mut rows = Vec::new();
     for (name, rays, is_image) in &sets {
         // The hit share comes from the timed runs (every run gives the same hits).
@@ -67,7 +67,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         });
         let mut err = None;
         let gpu_s = best(&mut || {
-            if let Err(e) = gpu.trace(&gs, rays, args.traversal, true) {
+            if let Err(e) = gpu.trace(&gs, rays, opts) {
                 err = Some(e);
             }
         });
@@ -75,7 +75,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         let gpu_packets = *is_image && gridrt_gpu::Kernel::for_kind(grid.kind()).packet_file().is_some();
         let gpu_packet_s = gpu_packets.then(|| {
             best(&mut || {
-                if let Err(e) = gpu.trace_image(&gs, rays, width, args.traversal, true) {
+                if let Err(e) = gpu.trace_image(&gs, rays, width, opts) {
                     err = Some(e);
                 }
             })

@@ -40,7 +40,7 @@ pub fn run() -> anyhow::Result<()> {
     println!("\n{:<8} {:<10} {:>10} {:>12} {:>12}", "rays", "traversal", "Mrays/s", "cells/ray", "tests/ray");
     for (name, rays) in &sets {
         for traversal in Traversal::EXACT {
-            let opts = TraceOptions { traversal, mailbox: true };
+            let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
             let start = Instant::now();
             let (_, s) = trace_batch(rays, true, |r| trace_flat(&grid, &tris, r, opts));
             let mrays = s.rays as f64 / start.elapsed().as_secs_f64() / 1e6;

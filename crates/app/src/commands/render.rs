@@ -204,11 +204,13 @@ fn cpu_frame(
     packets: Option<PacketOptions>,
 ) -> Rendered {
     let shade = gridrt_gpu::render::shade_params(bounds, opts);
-    let topts = gridrt_grid::TraceOptions { traversal: opts.traversal, mailbox: opts.mailbox };
+    let topts = gridrt_grid::TraceOptions { traversal: opts.traversal, mailbox: opts.mailbox, ..Default::default() };
     let width = opts.width as usize;
     // Per-ray counts only for the heatmaps (single rays; packets keep none).
     let per_ray = opts.view.is_heatmap();
-    let trace = |rays: &[Ray]| -> (Vec<Hit>, Vec<gridrt_grid::RayStats>, gridrt_grid::BatchStats, PacketStats) {
+    let trace = |rays: &[Ray],
+                 topts: gridrt_grid::TraceOptions|
+     -> (Vec<Hit>, Vec<gridrt_grid::RayStats>, gridrt_grid::BatchStats, PacketStats) {
         if per_ray && packets.is_none() {
             let (h, s): (Vec<Hit>, Vec<_>) = rays.par_iter().map(|r| grid.trace(tris, r, topts)).unzip();
             let mut b = gridrt_grid::BatchStats::default();
@@ -219,12 +221,13 @@ fn cpu_frame(
         (h, Vec::new(), b, ps)
     };
     let start = Instant::now();
-    let (hits, stats, batch, ps) = trace(primary);
+    let (hits, stats, batch, ps) = trace(primary, topts);
     let primary_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
     let mut shadow = Vec::new();
     crate::lab::frame::shadow_rays_from_hits(&shade, primary, &hits, &mut shadow);
-    let (shadow_hits, _, _, sps) = trace(&shadow);
+    // Shadow rays only ask whether anything occludes the light (any hit).
+    let (shadow_hits, _, _, sps) = trace(&shadow, topts.occlusion());
     let shadow_ms = start.elapsed().as_secs_f64() * 1e3;
     let stats = per_ray.then_some(&stats[..]);
     let rgba = crate::lab::frame::shade_pixels(&shade, tris, primary, &hits, stats, &shadow_hits);

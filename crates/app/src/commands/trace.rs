@@ -18,6 +18,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     if args.traversal == Traversal::Bresenham {
         eprintln!("warning: naive Bresenham is incomplete by design and misses hits (survey Figure 1)");
     }
+    let opts = TraceOptions { traversal: args.traversal, mailbox: args.mailbox, ..Default::default() };
     let (label, build_ms, memory, hits, stats, secs) = match args.backend {
         Backend::Brute => {
             let start = Instant::now();
@@ -31,9 +32,9 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             let gpu = gridrt_gpu::GpuSession::new(&ctx, &tris, mesh.bounds())?;
             let gs = gpu.upload(&grid)?;
             // Warm-up (pipeline creation) outside the timing.
-            gpu.trace(&gs, &rays[..rays.len().min(64)], args.traversal, args.mailbox)?;
+            gpu.trace(&gs, &rays[..rays.len().min(64)], opts)?;
             let start = Instant::now();
-            let (hits, st) = gpu.trace(&gs, &rays, args.traversal, args.mailbox)?;
+            let (hits, st) = gpu.trace(&gs, &rays, opts)?;
             let secs = start.elapsed().as_secs_f64();
             let mut stats = BatchStats::default();
             for (h, s) in hits.iter().zip(&st) {
@@ -50,7 +51,6 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         }
         Backend::Cpu => {
             let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
-            let opts = TraceOptions { traversal: args.traversal, mailbox: args.mailbox };
             let start = Instant::now();
             let (hits, stats) = grid.trace_batch(&tris, &rays, opts, true);
             let r = b.stats.resolution;

@@ -26,6 +26,6 @@ impl FixedView {
 
     /// The render's traversal and mailbox, for CPU traces of the same frame.
     pub fn trace_options(&self) -> TraceOptions {
-        TraceOptions { traversal: self.opts.traversal, mailbox: self.opts.mailbox }
+        TraceOptions { traversal: self.opts.traversal, mailbox: self.opts.mailbox, ..Default::default() }
     }
 }

@@ -79,15 +79,15 @@ pub fn measure_config(
 ) -> anyhow::Result<Point> {
     let (grid, report) = structure::build(tris, cfg)?;
     let res = report.stats.resolution;
-    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
     let (_, stats) = grid.trace_batch(tris, rays, opts, true);
     let (cpu_s, _) = best_of(repeat, || grid.trace_batch(tris, rays, opts, true));
     let gpu_s = match gpu {
         Some(g) => {
             let gs = g.upload(&grid)?;
             // One untimed warm-up (pipeline creation, first upload).
-            g.trace(&gs, &rays[..rays.len().min(64)], opts.traversal, true)?;
-            let (secs, r) = best_of(repeat, || g.trace(&gs, rays, opts.traversal, true));
+            g.trace(&gs, &rays[..rays.len().min(64)], opts)?;
+            let (secs, r) = best_of(repeat, || g.trace(&gs, rays, opts));
             r?;
             Some(secs)
         }

@@ -74,7 +74,7 @@ pub fn hit_share(hits: &[Hit]) -> f64 {
 /// A `w`×`h` probe image of `cam` traced through `probe`: its rays and their hits.
 fn probe_image(tris: &[[Vec3; 3]], probe: &AnyGrid, cam: &Camera, w: u32, h: u32) -> (Vec<Ray>, Vec<Hit>) {
     let rays = image_rays(cam, w, h);
-    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
     let (hits, _) = probe.trace_batch(tris, &rays, opts, true);
     (rays, hits)
 }

@@ -9,7 +9,7 @@ use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_grid::build::{BuildOptions, PhaseTimes};
 use gridrt_grid::geometry::GridGeometry;
 use gridrt_grid::{
-    AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, Resolution, Traversal, structure, triangle_bounds,
+    AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, Resolution, TraceOptions, structure, triangle_bounds,
 };
 use gridrt_scene::procedural::{self, SceneKind};
 
@@ -82,8 +82,11 @@ fn gpu_build_of_shared_scenes_at_auto_resolution() {
         let uploaded = GpuStructure::new(ctx, &cpu).unwrap();
         let rays = gridrt_scene::rays::random_rays(&mesh.bounds(), 2000, 9);
         let tracer = gridrt_gpu::Tracer::new();
-        let a = tracer.trace(ctx, &scene, &g.structure, &rays, Traversal::AmanatidesWoo, true).unwrap();
-        let b = tracer.trace(ctx, &scene, &uploaded, &rays, Traversal::AmanatidesWoo, true).unwrap();
+        let a = tracer
+            .trace(ctx, &scene, &g.structure, &rays, TraceOptions { mailbox: true, ..Default::default() })
+            .unwrap();
+        let b =
+            tracer.trace(ctx, &scene, &uploaded, &rays, TraceOptions { mailbox: true, ..Default::default() }).unwrap();
         assert_eq!(a.0, b.0, "{}: hits", path.display());
     }
 }

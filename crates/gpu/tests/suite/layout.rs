@@ -36,7 +36,7 @@ fn rust_and_wgsl_structs_have_the_same_layout() {
         trace,
         "Params",
         GridParams,
-        [grid_min, inv_cell, res, ray_count, mailbox, macro_edge, first_ray, image_width]
+        [grid_min, inv_cell, res, ray_count, mailbox, macro_edge, first_ray, image_width, query, _pad0, _pad1, _pad2]
     );
     check!(trace, "Node", GpuNode, [res_first]);
     let render = naga::front::wgsl::parse_str(&compose("shade.wgsl").unwrap()).unwrap();

@@ -9,9 +9,9 @@ use gridrt_gpu::cpu::{camera_rays, gpu_camera, shadow_ray};
 use gridrt_gpu::render::shade_params;
 use gridrt_gpu::trace::tile_quantum;
 use gridrt_gpu::{FrameTarget, GpuSession, RenderOptions, View};
-use gridrt_grid::{GridConfig, GridKind, Traversal, structure};
+use gridrt_grid::{GridConfig, GridKind, Query, TraceOptions, Traversal, structure};
 use gridrt_scene::procedural::{SceneKind, generate};
-use gridrt_scene::{Aabb, Camera, Hit};
+use gridrt_scene::{Aabb, Camera, Hit, Ray};
 
 use super::common::{default_scene, gpu, read_texture};
 
@@ -32,6 +32,10 @@ fn cameras(b: &Aabb) -> Vec<Camera> {
     });
     v
 }
+
+/// Amanatides–Woo with the mailbox, closest hits.
+const MAILBOX: TraceOptions =
+    TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, query: Query::Closest };
 
 fn differing(a: &[Hit], b: &[Hit]) -> usize {
     a.iter().zip(b).filter(|(x, y)| !x.same_bits(y)).count()
@@ -55,8 +59,10 @@ fn packet_kernels_equal_single_ray_kernels_bit_for_bit() {
                 let opts = RenderOptions::new(*cam, w, h);
                 let rays = camera_rays(&gpu_camera(cam, w, h));
                 for mailbox in [true, false] {
-                    let (single, single_stats) = gpu.trace(&gs, &rays, Traversal::AmanatidesWoo, mailbox).unwrap();
-                    let (packets, stats) = gpu.trace_image(&gs, &rays, w, Traversal::AmanatidesWoo, mailbox).unwrap();
+                    let (single, single_stats) =
+                        gpu.trace(&gs, &rays, TraceOptions { mailbox, ..Default::default() }).unwrap();
+                    let (packets, stats) =
+                        gpu.trace_image(&gs, &rays, w, TraceOptions { mailbox, ..Default::default() }).unwrap();
                     let name = format!("{kind:?} {grid_kind} camera {ci} mailbox {mailbox}");
                     assert_eq!(differing(&single, &packets), 0, "{name}: primary rays");
                     assert_eq!(stats.len(), rays.len());
@@ -71,9 +77,25 @@ fn packet_kernels_equal_single_ray_kernels_bit_for_bit() {
                     // Shadow rays from the hits to the light (common end, scattered origins).
                     let shade = shade_params(&b, &opts);
                     let shadow: Vec<_> = rays.iter().zip(&single).map(|(r, h)| shadow_ray(&shade, r, h)).collect();
-                    let (s1, _) = gpu.trace(&gs, &shadow, Traversal::AmanatidesWoo, true).unwrap();
-                    let (s2, _) = gpu.trace_image(&gs, &shadow, w, Traversal::AmanatidesWoo, true).unwrap();
+                    let (s1, _) = gpu.trace(&gs, &shadow, MAILBOX).unwrap();
+                    let (s2, _) = gpu.trace_image(&gs, &shadow, w, MAILBOX).unwrap();
                     assert_eq!(differing(&s1, &s2), 0, "{name}: shadow rays");
+                    // Occlusion queries (the renderer's shadow pass): hit or miss as the closest
+                    // query, in both kernels, also on segments ending at and around the hits.
+                    let mut segments = shadow.clone();
+                    for end in [f32::next_down, |t| t, f32::next_up] {
+                        segments.extend(shadow.iter().zip(&s1).map(|(r, h)| {
+                            if h.is_hit() { Ray::new(r.o(), r.d(), r.tmin, end(h.t).max(r.tmin)) } else { *r }
+                        }));
+                    }
+                    let (closest, _) = gpu.trace(&gs, &segments, MAILBOX).unwrap();
+                    let any = MAILBOX.occlusion();
+                    let (a1, _) = gpu.trace(&gs, &segments, any).unwrap();
+                    let (a2, _) = gpu.trace_image(&gs, &segments, w, any).unwrap();
+                    for (what, got) in [("single", &a1), ("packets", &a2)] {
+                        let wrong = closest.iter().zip(got.iter()).filter(|(c, a)| c.is_hit() != a.is_hit()).count();
+                        assert_eq!(wrong, 0, "{name}: occlusion queries ({what}) disagree with closest hits");
+                    }
                     walked += usize::from(single.iter().any(|h| h.is_hit()));
                 }
             }

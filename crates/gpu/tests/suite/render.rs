@@ -27,7 +27,7 @@ fn default_scene_renders_deterministically_and_matches_the_cpu() {
         let (cpu_hits, _) = grid.trace_batch(
             &tris,
             &cpu_rays,
-            TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true },
+            TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() },
             true,
         );
         let same = a.hits.iter().zip(&cpu_hits).filter(|(g, c)| g.triangle == c.triangle).count();
@@ -70,8 +70,12 @@ fn frames_larger_than_a_tile_render_exactly() {
     let frame = gpu.render(&gs, &opts).unwrap();
     assert_eq!((frame.hits.len(), frame.rgba.len()), ((w * h) as usize, (w * h * 4) as usize));
     let rays = camera_rays(&gpu_camera(&opts.camera, w, h));
-    let (cpu_hits, _) =
-        grid.trace_batch(&tris, &rays, TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true }, true);
+    let (cpu_hits, _) = grid.trace_batch(
+        &tris,
+        &rays,
+        TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() },
+        true,
+    );
     let same = frame.hits.iter().zip(&cpu_hits).filter(|(g, c)| g.triangle == c.triangle).count();
     println!("{w}x{h} in tiles of {}: {same} of {} pixels agree with the CPU", tile_limit(ctx), w * h);
     assert!(same as f64 >= 0.999 * cpu_hits.len() as f64, "{same} of {} pixels agree", cpu_hits.len());
@@ -116,7 +120,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
     assert!(FrameTarget::new(ctx, w, h, false).unwrap().display_view().is_none());
     let cam = gpu_camera(&camera, w, h);
     let rays = camera_rays(&cam);
-    let topts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let topts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
     let (cpu_hits, _) = grid.trace_batch(&tris, &rays, topts, true);
     for view in View::ALL {
         let opts = RenderOptions { view, ..fitted };

@@ -92,10 +92,10 @@ fn compare_with(
         let gs = GpuStructure::new(ctx, &grid).unwrap();
         for traversal in Traversal::EXACT {
             for &mailbox in mailboxes {
-                let opts = TraceOptions { traversal, mailbox };
+                let opts = TraceOptions { traversal, mailbox, ..Default::default() };
                 let (cpu_hits, _) = grid.trace_batch(tris, rays, opts, true);
                 let cpu_stats: Vec<_> = rays.iter().map(|r| grid.trace(tris, r, opts).1).collect();
-                let (gpu_hits, gpu_stats) = tracer.trace(ctx, &scene, &gs, rays, traversal, mailbox).unwrap();
+                let (gpu_hits, gpu_stats) = tracer.trace(ctx, &scene, &gs, rays, opts).unwrap();
                 let mut bad = Vec::new();
                 let mut ties = 0;
                 let mut cell_diff = Vec::new();

@@ -16,6 +16,8 @@
 //! cross in a slice is skipped there and not mailboxed ([`frustum::SliceRect::misses`]): no
 //! ray can meet it in that slice, and it is in the cells of every slice where one can.
 //!
+//! An occlusion query ([`Query::Any`]) ends a ray at its first hit instead, as for single rays.
+//!
 //! Packets whose rays do not share the sign of one axis (incoherent) are traced as single rays.
 //! The rectangles are computed per ray, not from four corner rays, so any packet works: camera
 //! tiles (common origin), shadow rays towards a point light (common end) or arbitrary rays.
@@ -32,6 +34,7 @@ use crate::geometry::GridGeometry;
 use crate::macrocell::MacrocellGrid;
 use crate::mailbox::Mailbox;
 use crate::stats::{BatchStats, RayStats};
+use crate::trace::Query;
 use frustum::{Lane, SliceWalk};
 use packet_test::PacketRays;
 
@@ -160,14 +163,17 @@ pub enum PacketWalk {
 }
 
 impl Packet {
-    /// Closest hits of `rays` in `grid` (built over `tris`) as one packet, written to `hits` and
-    /// `stats` (each as long as `rays`). An incoherent packet calls `single` for each ray.
+    /// Closest hits (or any hits, by `query`) of `rays` in `grid` (built over `tris`) as one
+    /// packet, written to `hits` and `stats` (each as long as `rays`). An incoherent packet calls
+    /// `single` for each ray.
+    #[allow(clippy::too_many_arguments)]
     pub fn trace<G: SliceCells>(
         &mut self,
         grid: &G,
         tris: &[[Vec3; 3]],
         rays: &[Ray],
         mailbox: bool,
+        query: Query,
         (hits, stats): (&mut [Hit], &mut [RayStats]),
         single: impl Fn(&Ray) -> (Hit, RayStats),
     ) -> PacketWalk {
@@ -240,7 +246,7 @@ impl Packet {
             self.active.retain(|&i| {
                 let lane = &lanes[i as usize];
                 let t = best[i as usize].t;
-                let ends = walk.ends_ray(j, lane, t);
+                let ends = (query == Query::Any && best[i as usize].is_hit()) || walk.ends_ray(j, lane, t);
                 if ends {
                     record(&mut stats[i as usize], lane, cb, cells, tests);
                     dead = soa.remove(i);
@@ -267,15 +273,18 @@ impl Packet {
     }
 }
 
-/// Closest hits of an image's rays (`rays` row-major, `width` per row) in `tile`×`tile`
-/// packets, on all threads when `parallel` (and the `parallel` feature): hits in the order of
-/// `rays`, batch and packet figures. `single` traces one ray of an incoherent packet.
+/// Closest hits (or any hits, by `query`) of an image's rays (`rays` row-major, `width` per
+/// row) in `tile`×`tile` packets, on all threads when `parallel` (and the `parallel` feature):
+/// hits in the order of `rays`, batch and packet figures. `single` traces one ray of an
+/// incoherent packet (with the same query).
+#[allow(clippy::too_many_arguments)]
 pub fn trace_image<G: SliceCells + Sync>(
     grid: &G,
     tris: &[[Vec3; 3]],
     rays: &[Ray],
     width: usize,
     opts: PacketOptions,
+    query: Query,
     parallel: bool,
     single: impl Fn(&Ray) -> (Hit, RayStats) + Sync,
 ) -> (Vec<Hit>, BatchStats, PacketStats) {
@@ -297,7 +306,7 @@ pub fn trace_image<G: SliceCells + Sync>(
             }
             ph.resize(pr.len(), Hit::MISS);
             ps.resize(pr.len(), RayStats::default());
-            match packet.trace(grid, tris, &pr, opts.mailbox, (&mut ph, &mut ps), &single) {
+            match packet.trace(grid, tris, &pr, opts.mailbox, query, (&mut ph, &mut ps), &single) {
                 PacketWalk::Coherent => pstats.packets += 1,
                 PacketWalk::SingleRays => pstats.single_ray_packets += 1,
             }

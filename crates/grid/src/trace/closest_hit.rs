@@ -10,14 +10,30 @@
 //! triangle with an equal or smaller `t` must overlap a cell up to the current one, thanks to
 //! the conservative insertion margin (see [`crate::geometry`]), so it has been tested by then.
 //! The result is bit-identical to [`crate::brute::trace`].
+//!
+//! An occlusion query ([`Query::Any`], shadow rays) stops at the first hit found anywhere on the
+//! ray's segment instead: which triangle that is depends on the structure, whether there is one
+//! does not (it is the closest query's `is_hit`).
 
 use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
+use serde::{Deserialize, Serialize};
 
 use crate::mailbox::Mailbox;
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
 use crate::triangle::{closer, intersect};
+
+/// What a search looks for (`--query`; the WGSL twin is `QUERY_*` in closest_hit.wgsl).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Query {
+    /// The closest hit by (t, triangle index): bit-identical across structures.
+    #[default]
+    Closest,
+    /// Any hit on the ray's segment (occlusion, as for shadow rays): the search ends at the
+    /// first hit found. Only whether the ray hits is defined; it equals the closest query's.
+    Any,
+}
 
 /// One ray's search: the best hit so far, its stats and its mailbox.
 #[derive(Debug)]
@@ -28,6 +44,8 @@ pub struct ClosestHit<'a> {
     best: Hit,
     stats: RayStats,
     mailbox: Option<Mailbox>,
+    /// [`Query::Any`]: done at the first hit.
+    any: bool,
 }
 
 impl<'a> ClosestHit<'a> {
@@ -39,7 +57,8 @@ impl<'a> ClosestHit<'a> {
 
     /// Tests the triangles `refs` of a leaf the ray leaves at `t_exit` (skipping mailboxed
     /// ones), keeping the closest hit by (t, index). True when the search is done: the best hit
-    /// lies before `t_exit`, so no later cell can hold a closer one.
+    /// lies before `t_exit`, so no later cell can hold a closer one (an occlusion query: as soon
+    /// as there is a hit).
     #[inline]
     pub fn test_cell(&mut self, refs: &[u32], t_exit: f32) -> bool {
         // The triangles' loads start together, not one test after another: random rays miss
@@ -58,6 +77,9 @@ impl<'a> ClosestHit<'a> {
                 && closer(h.t, tri, self.best.t, self.best.triangle)
             {
                 self.best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
+                if self.any {
+                    return true;
+                }
             }
         }
         self.done_at(t_exit)
@@ -89,14 +111,15 @@ fn prefetch(tris: &[[Vec3; 3]], i: u32) {
     let _ = (tris, i);
 }
 
-/// The closest hit of `ray` among `tris` (the triangles the structure was built from): `walk`
-/// visits the structure's cells in order and returns when [`ClosestHit::test_cell`] says the
-/// search is done or the cells run out.
+/// The closest hit of `ray` among `tris` (the triangles the structure was built from), or any
+/// hit for [`Query::Any`]: `walk` visits the structure's cells in order and returns when
+/// [`ClosestHit::test_cell`] says the search is done or the cells run out.
 #[inline]
 pub fn closest_hit(
     tris: &[[Vec3; 3]],
     ray: &Ray,
     mailbox: bool,
+    query: Query,
     walk: impl FnOnce(&mut ClosestHit),
 ) -> (Hit, RayStats) {
     let Some(pr) = PreparedRay::new(ray) else {
@@ -108,6 +131,7 @@ pub fn closest_hit(
         best: Hit::MISS,
         stats: RayStats::default(),
         mailbox: mailbox.then(Mailbox::default),
+        any: query == Query::Any,
     };
     walk(&mut search);
     (search.best, search.stats)

@@ -9,6 +9,7 @@ use gridrt_scene::{Hit, Ray};
 use crate::flat::FlatGrid;
 use crate::stats::{BatchStats, RayStats};
 use crate::traversal::{Traversal, walk};
+pub use closest_hit::Query;
 use closest_hit::closest_hit;
 
 /// Per-trace settings.
@@ -16,11 +17,21 @@ use closest_hit::closest_hit;
 pub struct TraceOptions {
     pub traversal: Traversal,
     pub mailbox: bool,
+    /// Closest hit, or any hit (occlusion).
+    pub query: Query,
 }
 
-/// Closest hit of `ray` in `grid` over `tris` (the triangles the grid was built from).
+impl TraceOptions {
+    /// These options for an occlusion query ([`Query::Any`]).
+    pub fn occlusion(self) -> TraceOptions {
+        TraceOptions { query: Query::Any, ..self }
+    }
+}
+
+/// Closest hit (or any hit, by `opts.query`) of `ray` in `grid` over `tris` (the triangles the
+/// grid was built from).
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
-    closest_hit(tris, ray, opts.mailbox, |search| {
+    closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
         walk(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| grid.visit(search, index, t_exit));
     })

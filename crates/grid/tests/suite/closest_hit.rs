@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{BuildOptions, GridConfig, GridKind, InsertMode, Resolution, Traversal, structure};
+use gridrt_grid::{BuildOptions, GridConfig, GridKind, InsertMode, Query, Resolution, Traversal, structure};
 use gridrt_scene::Ray;
 use gridrt_scene::gltf_load::load_path;
 use gridrt_scene::rays::inside_rays;
@@ -45,7 +45,7 @@ pub fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: boo
                 }
                 for traversal in Traversal::EXACT {
                     for mailbox in [false, true] {
-                        let opts = TraceOptions { traversal, mailbox };
+                        let opts = TraceOptions { traversal, mailbox, ..Default::default() };
                         let (hits, stats) = grid.trace_batch(tris, rays, opts, true);
                         assert_same_hits(
                             &format!("{name} {kind} {insert:?} parallel={parallel} {traversal} mailbox={mailbox}"),
@@ -53,6 +53,16 @@ pub fn check_scene(name: &str, tris: &[[Vec3; 3]], rays: &[Ray], all_builds: boo
                             &expected,
                             &hits,
                         );
+                        if mailbox {
+                            let (any, _) = grid.trace_batch(tris, rays, opts.occlusion(), true);
+                            assert_same_occlusion(
+                                &format!("{name} {kind} {insert:?} parallel={parallel} {traversal} any hit"),
+                                tris,
+                                rays,
+                                &expected,
+                                &any,
+                            );
+                        }
                         if !parallel && mailbox {
                             println!(
                                 "    {traversal:>4} + mailbox: {:.2} cells/ray, {:.2} tests/ray",
@@ -90,6 +100,34 @@ fn every_grid_equals_brute_force_on_shared_scenes() {
 }
 
 #[test]
+fn occlusion_queries_equal_brute_force_on_segments_ending_at_hits() {
+    // Segments ending one ulp before, at and one ulp after each closest hit: any hit must be
+    // found exactly when the closest one lies in the segment.
+    for (name, g) in procedural_scenes() {
+        let tris = g.mesh.triangles();
+        let rays = mixed_rays(&g.mesh, &g.inside_points, matrix_rays(30_000), 17);
+        let (closest, _) = reference(&tris, &rays);
+        let segments = segments_around_hits(&rays, &closest);
+        let (expected, st) = reference(&tris, &segments);
+        assert!(st.hits > 0 && (st.hits as usize) < segments.len(), "{name}: segments both hit and miss");
+        for kind in GridKind::ALL {
+            for insert in InsertMode::ALL {
+                let cfg = GridConfig { kind, build: BuildOptions { insert, parallel: true }, ..GridConfig::default() };
+                let (grid, _) = structure::build(&tris, &cfg).unwrap();
+                for traversal in Traversal::EXACT {
+                    for mailbox in [false, true] {
+                        let opts = TraceOptions { traversal, mailbox, query: Query::Any };
+                        let (any, _) = grid.trace_batch(&tris, &segments, opts, true);
+                        let what = format!("{name} {kind} {insert:?} {traversal} mailbox={mailbox}");
+                        assert_same_occlusion(&what, &tris, &segments, &expected, &any);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn rays_from_inside_closed_meshes_never_escape() {
     // Tessellated spheres (one and a sphereflake) and the knot tube: every ray from an inside
     // point, aimed exactly at vertices, edge midpoints and edge points, must hit something.
@@ -114,7 +152,7 @@ fn rays_from_inside_closed_meshes_never_escape() {
                     let (grid, _) = structure::build(&tris, &cfg).unwrap();
                     for traversal in Traversal::EXACT {
                         for mailbox in [false, true] {
-                            let opts = TraceOptions { traversal, mailbox };
+                            let opts = TraceOptions { traversal, mailbox, ..Default::default() };
                             let (hits, stats) = grid.trace_batch(&tris, &rays, opts, true);
                             let escaped = hits.iter().filter(|h| !h.is_hit()).count();
                             assert_eq!(

@@ -90,6 +90,12 @@ fn check_packets(
                     &hits,
                 );
                 assert_eq!(stats.rays as usize, rays.len());
+                if mailbox {
+                    let any = TraceOptions { mailbox, ..Default::default() }.occlusion();
+                    let (hits, _, _) = grid.trace_packets(tris, rays, width, any, packets, true);
+                    let what = format!("{name} {} tile {tile} any hit", grid.kind());
+                    assert_same_occlusion(&what, tris, rays, expected, &hits);
+                }
                 if grid.has_packets() {
                     let tiles = (width.div_ceil(tile as usize) * (rays.len() / width).div_ceil(tile as usize)) as u64;
                     assert_eq!(ps.packets + ps.single_ray_packets, tiles, "{name}: every tile is one packet");
@@ -122,6 +128,22 @@ fn check_scene_images(name: &str, tris: &[[Vec3; 3]], width: u32, height: u32) {
             width as usize,
             &shadow_expected,
         );
+        // Shadow segments ending just before, at and just after their occluders (three images).
+        let any = TraceOptions { mailbox: true, ..Default::default() }.occlusion();
+        for end in [f32::next_down, |t| t, f32::next_up] {
+            let around: Vec<Ray> = shadow
+                .iter()
+                .zip(&shadow_expected)
+                .map(|(r, h)| if h.is_hit() { Ray::new(r.o(), r.d(), r.tmin, end(h.t).max(r.tmin)) } else { *r })
+                .collect();
+            let (around_expected, _) = reference(tris, &around);
+            for grid in &grids {
+                let (hits, _, _) =
+                    grid.trace_packets(tris, &around, width as usize, any, PacketOptions::default(), true);
+                let what = format!("{name} camera {k} {} shadow segments", grid.kind());
+                assert_same_occlusion(&what, tris, &around, &around_expected, &hits);
+            }
+        }
         println!("{name} camera {k}: {} hits, {} shadowed; {coherent} + {sc} coherent packets", st.hits, sst.hits);
     }
 }

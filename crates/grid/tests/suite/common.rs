@@ -1,6 +1,8 @@
 //! Shared helpers: scenes, ray sets, the brute-force reference, the shared-scene folder.
 
 use glam::Vec3;
+use gridrt_grid::ray::PreparedRay;
+use gridrt_grid::triangle::intersect;
 use gridrt_grid::{BatchStats, brute, trace::trace_batch};
 use gridrt_scene::procedural::{self, SceneKind};
 use gridrt_scene::rays::{camera_rays, inside_rays, random_rays};
@@ -67,4 +69,42 @@ pub fn assert_same_hits(what: &str, rays: &[Ray], expected: &[Hit], got: &[Hit])
             .collect();
         panic!("{what}: {} of {} rays differ from brute force:\n{}", bad.len(), rays.len(), show.join("\n"));
     }
+}
+
+/// Asserts that an occlusion query's hits (`got`) agree with the closest hits (`expected`) on
+/// whether each ray hits, and that every hit reported is a real one: its triangle's test gives
+/// that `t` (bit for bit) within the ray's segment.
+pub fn assert_same_occlusion(what: &str, tris: &[[Vec3; 3]], rays: &[Ray], expected: &[Hit], got: &[Hit]) {
+    assert_eq!(expected.len(), got.len());
+    let real = |r: &Ray, h: &Hit| {
+        let Some(pr) = PreparedRay::new(r) else { return false };
+        tris.get(h.triangle as usize).and_then(|t| intersect(&pr, t)).is_some_and(|th| th.t.to_bits() == h.t.to_bits())
+    };
+    let bad: Vec<usize> = (0..expected.len())
+        .filter(|&i| expected[i].is_hit() != got[i].is_hit() || (got[i].is_hit() && !real(&rays[i], &got[i])))
+        .collect();
+    if !bad.is_empty() {
+        let show: Vec<String> = bad
+            .iter()
+            .take(5)
+            .map(|&i| format!("ray {i} {:?}: closest {:?}, any {:?}", rays[i], expected[i], got[i]))
+            .collect();
+        panic!("{what}: {} of {} occlusion answers are wrong:\n{}", bad.len(), rays.len(), show.join("\n"));
+    }
+}
+
+/// Segments that end just before, exactly at and just after each ray's closest hit in
+/// `expected` (and the rays that miss, unchanged): the occlusion query's hardest cases.
+pub fn segments_around_hits(rays: &[Ray], expected: &[Hit]) -> Vec<Ray> {
+    let mut out = Vec::with_capacity(rays.len() * 3);
+    for (r, h) in rays.iter().zip(expected) {
+        if !h.is_hit() {
+            out.push(*r);
+            continue;
+        }
+        for tmax in [h.t.next_down(), h.t, h.t.next_up()] {
+            out.push(Ray::new(r.o(), r.d(), r.tmin, tmax.max(r.tmin)));
+        }
+    }
+    out
 }

@@ -34,7 +34,12 @@ fn check(name: &str, tris: &[[Vec3; 3]], rays: usize, max_bytes_per_tri: f64) {
             );
             assert!(per_tri <= max_bytes_per_tri, "{name} {kind} {insert:?}: {per_tri} bytes per triangle");
             for traversal in Traversal::EXACT {
-                let (hits, _) = grid.trace_batch(tris, &rays, TraceOptions { traversal, mailbox: true }, true);
+                let (hits, _) = grid.trace_batch(
+                    tris,
+                    &rays,
+                    TraceOptions { traversal, mailbox: true, ..Default::default() },
+                    true,
+                );
                 assert_same_hits(&format!("{name} {kind} {insert:?} {traversal}"), &rays, &expected, &hits);
             }
         }

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use gridrt_grid::irregular::{IrregularGrid, IrregularOptions};
-use gridrt_grid::{BuildOptions, CostModel, Resolution, build_flat};
+use gridrt_grid::{BuildOptions, CostModel, Resolution, TraceOptions, build_flat};
 
 use super::common::*;
 
@@ -24,7 +24,10 @@ fn irregular_grid_equals_brute_force() {
                 let irr = IrregularGrid::from_flat(flat, IrregularOptions { expand, ..Default::default() });
                 assert!(irr.cells.len() as u64 <= flat.geom.cell_count(), "{name}: more cells than voxels");
                 for mailbox in [false, true] {
-                    let got: Vec<_> = rays.iter().map(|r| irr.trace(&tris, r, mailbox).0).collect();
+                    let got: Vec<_> = rays
+                        .iter()
+                        .map(|r| irr.trace(&tris, r, TraceOptions { mailbox, ..Default::default() }).0)
+                        .collect();
                     let what = format!("{name} irregular x{scale} expand={expand} mailbox={mailbox}");
                     assert_same_hits(&what, &rays, &expected, &got);
                 }

@@ -3,8 +3,10 @@
 //! triangles, each frame is posed once; then every grid kind is rebuilt from scratch and every
 //! BVH strategy is rebuilt (obvhs BVH2 `fastest_build`, obvhs CWBVH, `bvh`'s `build_par`) or
 //! refit (obvhs BVH2, built once with `medium_build`), and all trace the same 512×512 primary
-//! rays and the same shadow rays (from the flat grid's primary hits). Build and trace time per
-//! frame are reported apart; hits are compared with the flat grid's as in `gridrt bench`.
+//! rays and the same shadow rays (from the flat grid's primary hits; occlusion queries, each
+//! structure stopping at its first hit). Build and trace time per frame are reported apart;
+//! primary hits are compared with the flat grid's as in `gridrt bench`, shadow rays on whether
+//! they are occluded.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -42,7 +44,8 @@ pub struct DynamicRow {
     pub trace_ms: f64,
     /// build + trace (pose is the same for everyone and reported apart).
     pub total_ms: f64,
-    /// Primary and shadow rays whose hit disagrees with the flat grid's (see `agree`).
+    /// Primary rays whose hit disagrees with the flat grid's (see `agree`) and shadow rays
+    /// whose occlusion does.
     pub mismatches: u64,
 }
 
@@ -126,7 +129,7 @@ impl Built {
         match self {
             Built::Grid(g, packets) => crate::lab::frame::trace_frame(g, tris, rays, SIZE as usize, opts, *packets).0,
             #[cfg(feature = "peers")]
-            Built::Peer(p) => p.trace_batch(tris, rays),
+            Built::Peer(p) => p.trace_batch(tris, rays, opts.query),
         }
     }
 }
@@ -294,7 +297,8 @@ fn bench_scene(
             if reference.is_none() {
                 crate::lab::frame::shadow_rays_from_hits(&view.shade, primary, &hits, &mut shadow);
             }
-            let shadow_hits = built.trace(tris, &shadow, trace_opts);
+            // Shadow rays are occlusion queries (any hit) for every structure.
+            let shadow_hits = built.trace(tris, &shadow, trace_opts.occlusion());
             let traced = Instant::now();
             let sum = &mut sums[s];
             let build_ms = (built_at - start).as_secs_f64() * 1e3;
@@ -308,7 +312,9 @@ fn bench_scene(
             match &reference {
                 Some((rp, rs)) => {
                     let differ = |a: &[Hit], b: &[Hit]| a.iter().zip(b).filter(|(x, y)| !agree(x, y)).count() as u64;
-                    sum.mismatches += differ(&hits, rp) + differ(&shadow_hits, rs);
+                    let occluded_differ =
+                        shadow_hits.iter().zip(rs).filter(|(x, y)| x.is_hit() != y.is_hit()).count() as u64;
+                    sum.mismatches += differ(&hits, rp) + occluded_differ;
                 }
                 None => reference = Some((hits, shadow_hits)),
             }

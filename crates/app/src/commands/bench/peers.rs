@@ -31,6 +31,7 @@ use bvh::aabb::{Aabb as BvhAabb, Bounded};
 use bvh::bounding_hierarchy::{BHShape, BoundingHierarchy};
 use bvh::bvh::{Bvh, BvhNode};
 use glam::{Vec3, Vec3A};
+use gridrt_grid::Query;
 use gridrt_grid::ray::PreparedRay;
 use gridrt_grid::triangle::{closer, intersect};
 use gridrt_scene::{Hit, Ray};
@@ -303,20 +304,27 @@ impl PeerBvh {
         true
     }
 
-    /// The closest hits of `rays`, on all threads.
-    pub fn trace_batch(&self, tris: &[[Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
+    /// The closest hits of `rays` (or any hits, by `query`), on all threads. Embree answers
+    /// occlusion queries with closest hits (right, not faster: its occlusion call is not part of
+    /// any measurement here).
+    pub fn trace_batch(&self, tris: &[[Vec3; 3]], rays: &[Ray], query: Query) -> Vec<Hit> {
         use rayon::prelude::*;
         #[cfg(feature = "embree")]
         if let PeerBvh::Embree(e) = self {
             return rays.par_chunks(1024).flat_map_iter(|c| e.trace(c)).collect();
         }
-        rays.par_chunks(1024).flat_map_iter(|c| c.iter().map(|r| self.trace(tris, r)).collect::<Vec<_>>()).collect()
+        rays.par_chunks(1024)
+            .flat_map_iter(|c| c.iter().map(|r| self.trace(tris, r, query)).collect::<Vec<_>>())
+            .collect()
     }
 
-    /// The closest hit of `ray` (a miss for rays no triangle can be hit by).
-    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray) -> Hit {
+    /// The closest hit of `ray` (a miss for rays no triangle can be hit by); for
+    /// [`Query::Any`] the first hit found, through each library's early-exit traversal
+    /// (obvhs' `ray_traverse_miss`; the `bvh` loop returns at its first hit).
+    pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, query: Query) -> Hit {
         let Some(prepared) = PreparedRay::new(ray) else { return Hit::MISS };
         let mut best = Closest { ray: prepared, hit: Hit::MISS };
+        let any = query == Query::Any;
         match self {
             PeerBvh::Bvh { bvh, .. } => {
                 if bvh.nodes.is_empty() {
@@ -333,6 +341,9 @@ impl PeerBvh {
                     match &bvh.nodes[node] {
                         BvhNode::Leaf { shape_index, .. } => {
                             best.test(tris, *shape_index as u32, f32::INFINITY);
+                            if any && best.hit.is_hit() {
+                                return best.hit;
+                            }
                         }
                         BvhNode::Node { child_l_index, child_l_aabb, child_r_index, child_r_aabb, .. } => {
                             let tmax = best.hit.t.min(ray.tmax);
@@ -360,16 +371,36 @@ impl PeerBvh {
             }
             PeerBvh::Bvh2(b) => {
                 let r = obvhs::ray::Ray::new(Vec3A::from(ray.o()), Vec3A::from(ray.d()), ray.tmin, ray.tmax);
-                let mut rh = RayHit::none();
-                b.ray_traverse(r, &mut rh, |r, slot| best.test(tris, b.primitive_indices[slot], r.tmax));
+                if any {
+                    b.ray_traverse_miss(r, |r, slot| best.test(tris, b.primitive_indices[slot], r.tmax));
+                } else {
+                    let mut rh = RayHit::none();
+                    b.ray_traverse(r, &mut rh, |r, slot| best.test(tris, b.primitive_indices[slot], r.tmax));
+                }
             }
             PeerBvh::Cw { bvh, tris: None } => {
                 let r = obvhs::ray::Ray::new(Vec3A::from(ray.o()), Vec3A::from(ray.d()), ray.tmin, ray.tmax);
-                let mut rh = RayHit::none();
-                bvh.ray_traverse(r, &mut rh, |r, slot| best.test(tris, bvh.primitive_indices[slot], r.tmax));
+                if any {
+                    bvh.ray_traverse_miss(r, |r, slot| best.test(tris, bvh.primitive_indices[slot], r.tmax));
+                } else {
+                    let mut rh = RayHit::none();
+                    bvh.ray_traverse(r, &mut rh, |r, slot| best.test(tris, bvh.primitive_indices[slot], r.tmax));
+                }
             }
             PeerBvh::Cw { bvh, tris: Some(ot) } => {
                 let r = obvhs::ray::Ray::new(Vec3A::from(ray.o()), Vec3A::from(ray.d()), ray.tmin, ray.tmax);
+                if any {
+                    let mut found = Hit::MISS;
+                    bvh.ray_traverse_miss(r, |r, slot| {
+                        let triangle = bvh.primitive_indices[slot];
+                        let t = ot[triangle as usize].intersect(r);
+                        if t < r.tmax {
+                            found = Hit { t, triangle, u: 0.0, v: 0.0 };
+                        }
+                        t
+                    });
+                    return found;
+                }
                 let mut rh = RayHit::none();
                 if bvh.ray_traverse(r, &mut rh, |r, slot| ot[bvh.primitive_indices[slot] as usize].intersect(r)) {
                     let triangle = bvh.primitive_indices[rh.primitive_id as usize];

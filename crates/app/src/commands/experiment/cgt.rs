@@ -83,10 +83,10 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Primary rays of one image and their shadow rays, traced as single rays and in packets of
-/// each tile size; each packet row's hits checked against single rays'.
+/// Primary rays of one image and their shadow rays (occlusion queries), traced as single rays
+/// and in packets of each tile size; each packet row's hits checked against single rays'.
 fn measure_image(sc: &LabScene, grid: &AnyGrid, opts: &RenderOptions, tiles: &[u32], repeat: usize) -> Vec<Row> {
-    let topts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true };
+    let topts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
     let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&opts.camera, opts.width, opts.height));
     let shade = shade_params(&sc.bounds, opts);
     let width = opts.width as usize;
@@ -94,6 +94,12 @@ fn measure_image(sc: &LabScene, grid: &AnyGrid, opts: &RenderOptions, tiles: &[u
     let mut shadow = Vec::new();
     for which in ["primary", "shadow"] {
         let rays: &[Ray] = if which == "primary" { &primary } else { &shadow };
+        // Shadow rays are occlusion queries (any hit), as the renderer traces them: their
+        // packets must agree with single rays on hit or miss.
+        let topts = if which == "primary" { topts } else { topts.occlusion() };
+        let same = |a: &gridrt_scene::Hit, b: &gridrt_scene::Hit| {
+            if which == "primary" { a.same_bits(b) } else { a.is_hit() == b.is_hit() }
+        };
         let (s, (hits, stats)) = best_of(repeat, || grid.trace_batch(&sc.tris, rays, topts, true));
         let row = |tile, ms: f64, stats: gridrt_grid::BatchStats| Row {
             scene: sc.name.clone(),
@@ -116,7 +122,7 @@ fn measure_image(sc: &LabScene, grid: &AnyGrid, opts: &RenderOptions, tiles: &[u
             let popts = PacketOptions { tile, mailbox: true };
             let (p, (phits, pstats, packets)) =
                 best_of(repeat, || grid.trace_packets(&sc.tris, rays, width, topts, popts, true));
-            let mismatches = hits.iter().zip(&phits).filter(|(a, b)| !a.same_bits(b)).count() as u64;
+            let mismatches = hits.iter().zip(&phits).filter(|(a, b)| !same(a, b)).count() as u64;
             rows.push(Row {
                 packets: packets.packets,
                 single_ray_packets: packets.single_ray_packets,
