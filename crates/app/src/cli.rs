@@ -259,6 +259,10 @@ pub struct GridArgs {
     /// triangle (default 1.5; 0 is the survey's model and interval).
     #[arg(long, value_parser = parse_memory_weight)]
     pub memory_weight: Option<f64>,
+    /// Cache the memory term assumes, in KiB: a grid of B bytes pays B / (B + cache) of the
+    /// term (default 256; 0: the whole term at every size).
+    #[arg(long, value_parser = parse_memory_weight)]
+    pub cache_kib: Option<f64>,
     /// Number of resolutions sampled by guess-and-check.
     #[arg(long, default_value_t = CostModel::memory_aware().samples)]
     pub samples: u32,

@@ -34,6 +34,10 @@ use serde::{Deserialize, Serialize};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES, padded_bounds};
 use crate::insert::{InsertMode, cell_count, prepare};
 
+/// [`CostModel::memory_aware`]'s cache: grids of a few KiB (tens of triangles) pay almost no
+/// memory term, grids of megabytes nearly all of it. Read the README's tables for the value.
+pub const MEMORY_AWARE_CACHE_BYTES: f64 = (256 * 1024) as f64;
+
 /// The constants of T = Tsetup + m·Tstep + μ·Tinter, plus the guess-and-check settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CostModel {
@@ -51,6 +55,11 @@ pub struct CostModel {
     /// survey's model and interval).
     #[serde(default)]
     pub memory_weight: f64,
+    /// Bytes of grid the cache holds: the memory term is scaled by B / (B + cache_bytes) for a
+    /// grid of B bytes, so a grid far smaller than the cache costs next to no misses and one far
+    /// larger the whole term (0: the whole term at every size).
+    #[serde(default)]
+    pub cache_bytes: f64,
 }
 
 impl Default for CostModel {
@@ -64,6 +73,7 @@ impl Default for CostModel {
             max_cells_per_triangle: 64.0,
             max_cells: 1 << 26,
             memory_weight: 0.0,
+            cache_bytes: 0.0,
         }
     }
 }
@@ -74,7 +84,7 @@ impl CostModel {
     /// survey's in m, so 12 samples space m as finely as 24 do there (each sample is a counting
     /// pass, the largest part of a mid-size build).
     pub fn memory_aware() -> CostModel {
-        CostModel { memory_weight: 1.5, samples: 12, ..CostModel::default() }
+        CostModel { memory_weight: 1.5, samples: 12, cache_bytes: MEMORY_AWARE_CACHE_BYTES, ..CostModel::default() }
     }
 
     /// T(m) for a grid with `cells` cells and `n_m` triangle–cell references over `triangles`
@@ -85,10 +95,11 @@ impl CostModel {
     pub fn cost(&self, cells: u64, n_m: u64, triangles: usize) -> f64 {
         let m = (cells as f64).cbrt();
         let bytes = 4.125 * cells as f64 + 4.0 * n_m as f64;
+        let missed = bytes / (bytes + self.cache_bytes);
         self.t_setup
             + m * self.t_step
             + (n_m as f64 / (m * m)) * self.t_inter
-            + self.t_step * self.memory_weight * bytes / triangles.max(1) as f64
+            + self.t_step * self.memory_weight * missed * bytes / triangles.max(1) as f64
     }
 
     /// The memory cap on cells for `n` triangles.

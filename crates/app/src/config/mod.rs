@@ -26,6 +26,7 @@ impl GridArgs {
             samples: self.samples,
             max_cells: self.max_cells,
             memory_weight: self.memory_weight.unwrap_or(d.memory_weight),
+            cache_bytes: self.cache_kib.map_or(d.cache_bytes, |k| k * 1024.0),
             ..d
         };
         #[cfg(not(target_arch = "wasm32"))]
