@@ -265,10 +265,29 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     let lo = (tris.len() as f64).cbrt();
     assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
     for s in &choice.curve {
+        // The term scaled by the share of the grid's bytes the cache does not hold.
         let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
-        let expected = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 1.5 * bytes / tris.len() as f64;
+        let missed = bytes / (bytes + 256.0 * 1024.0);
+        let expected = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 1.5 * missed * bytes / tris.len() as f64;
         assert!((s.cost - expected).abs() < 1e-9, "{s:?}");
     }
+    // Without the cache (the term as first calibrated) the weight applies whole.
+    let uncached = CostModel { cache_bytes: 0.0, ..aware };
+    let s = &choice.curve[0];
+    let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
+    let whole = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 1.5 * bytes / tris.len() as f64;
+    assert!((uncached.cost(s.cells, s.n_m, tris.len()) - whole).abs() < 1e-9);
+    // A tiny scene's grid fits in the cache: the memory-aware choice is no coarser than the
+    // survey's there (the Cornell box's 36 triangles went to 3³ cells without the cache).
+    let tiny: Vec<[Vec3; 3]> = tris.iter().step_by((tris.len() / 36).max(1)).take(36).copied().collect();
+    let tb = gridrt_grid::triangle_bounds(&tiny);
+    let pick = |m: &CostModel| resolution::choose(&tiny, &tb, Resolution::Auto, m, InsertMode::BoundingBox, true);
+    assert!(
+        m(&pick(&aware)) > m(&pick(&uncached)),
+        "{:?} vs {:?}",
+        pick(&aware).resolution,
+        pick(&uncached).resolution
+    );
     let survey = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
     assert!(m(&choice) < m(&survey), "{:?} vs {:?}", choice.resolution, survey.resolution);
 }
