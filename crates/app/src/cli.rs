@@ -260,7 +260,7 @@ pub struct GridArgs {
     #[arg(long, value_parser = parse_memory_weight)]
     pub memory_weight: Option<f64>,
     /// Cache the memory term assumes, in KiB: a grid of B bytes pays B / (B + cache) of the
-    /// term (default 256; 0: the whole term at every size).
+    /// term (default 1024; 0: the whole term at every size).
     #[arg(long, value_parser = parse_memory_weight)]
     pub cache_kib: Option<f64>,
     /// Number of resolutions sampled by guess-and-check.

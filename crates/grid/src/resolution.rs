@@ -36,7 +36,7 @@ use crate::insert::{InsertMode, cell_count, prepare};
 
 /// [`CostModel::memory_aware`]'s cache: grids of a few KiB (tens of triangles) pay almost no
 /// memory term, grids of megabytes nearly all of it. Read the README's tables for the value.
-pub const MEMORY_AWARE_CACHE_BYTES: f64 = (256 * 1024) as f64;
+pub const MEMORY_AWARE_CACHE_BYTES: f64 = (1024 * 1024) as f64;
 
 /// The constants of T = Tsetup + m·Tstep + μ·Tinter, plus the guess-and-check settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

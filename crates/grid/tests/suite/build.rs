@@ -267,7 +267,7 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     for s in &choice.curve {
         // The term scaled by the share of the grid's bytes the cache does not hold.
         let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
-        let missed = bytes / (bytes + 256.0 * 1024.0);
+        let missed = bytes / (bytes + 1024.0 * 1024.0);
         let expected = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 1.5 * missed * bytes / tris.len() as f64;
         assert!((s.cost - expected).abs() < 1e-9, "{s:?}");
     }
