@@ -16,7 +16,7 @@ use gridrt_scene::{Aabb, Camera, Hit};
 
 use crate::context::{GpuContext, GpuError};
 use crate::cpu::gpu_camera;
-use crate::layout::{FrameTotals, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams, query_code};
+use crate::layout::{FrameTotals, GridParams, HIT_BYTES, PIXEL_BYTES, RAY_BYTES, STATS_BYTES, ShadeParams};
 use crate::trace::{TraceJob, Tracer, WORKGROUP, pipeline, read_back, records, walker_for};
 use crate::upload::{GpuScene, GpuStructure};
 use crate::view::View;
@@ -310,7 +310,7 @@ impl Renderer {
         let (tp, image) = crate::trace::dispatch_params(s, (first, count), topts, o.packets.then_some(o.width));
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
         // Shadow rays ask only whether anything occludes the light: any hit.
-        let sp = GridParams { query: query_code(Query::Any), ..tp };
+        let (sp, _) = crate::trace::dispatch_params(s, (first, count), topts.occlusion(), o.packets.then_some(o.width));
         q.write_buffer(&t.shadow_params, 0, bytemuck::bytes_of(&sp));
 
         let groups = count.div_ceil(WORKGROUP);

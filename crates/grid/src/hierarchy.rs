@@ -174,7 +174,7 @@ impl Hierarchy {
     /// Closest hit (see the module doc).
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
         let traversal = opts.traversal;
-        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
+        closest_hit(tris, ray, opts, |search| {
             if let Some(top) = self.geom.clip(&search.ray) {
                 self.walk_node(0, &top, traversal, search);
             }

@@ -288,7 +288,7 @@ impl IrregularGrid {
 
     /// Closest hit: from cell to cell, each left at its box's exit.
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
-        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
+        closest_hit(tris, ray, opts, |search| {
             let Some(gr) = self.geom.clip(&search.ray) else { return };
             let res = self.geom.res;
             let up = gr.d.cmpgt(Vec3::ZERO);

@@ -117,7 +117,7 @@ impl MacrocellGrid {
     /// Closest hit: macro walk, fine walk inside occupied macrocells.
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
         let traversal = opts.traversal;
-        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
+        closest_hit(tris, ray, opts, |search| {
             let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
             let a = self.a as f32;
             // Exact: A is a power of two.

@@ -43,7 +43,7 @@ impl ProximityGrid {
     /// Closest hit; empty cells with distance ≥ 2 are skipped in one jump (counted as one cell).
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
         let traversal = opts.traversal;
-        closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
+        closest_hit(tris, ray, opts, |search| {
             let Some(mut gr) = self.grid.geom.clip(&search.ray) else { return };
             let res = self.grid.geom.res;
             loop {

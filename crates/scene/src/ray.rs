@@ -27,6 +27,10 @@ impl Ray {
     pub fn at(&self, t: f32) -> Vec3 {
         self.o() + self.d() * t
     }
+    /// The same ray with its segment ending at `t` (never before `tmin`).
+    pub fn ending_at(&self, t: f32) -> Ray {
+        Ray { tmax: t.max(self.tmin), ..*self }
+    }
 }
 
 /// Triangle index that marks a miss.

@@ -6,7 +6,7 @@ use std::time::Instant;
 use glam::Vec3;
 use gridrt_gpu::{GpuContext, GpuSession};
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{GridConfig, GridKind, Resolution, Traversal, structure};
+use gridrt_grid::{GridConfig, GridKind, Resolution, structure};
 use gridrt_scene::Ray;
 use serde::Serialize;
 
@@ -79,7 +79,7 @@ pub fn measure_config(
 ) -> anyhow::Result<Point> {
     let (grid, report) = structure::build(tris, cfg)?;
     let res = report.stats.resolution;
-    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
+    let opts = TraceOptions::MAILBOX;
     let (_, stats) = grid.trace_batch(tris, rays, opts, true);
     let (cpu_s, _) = best_of(repeat, || grid.trace_batch(tris, rays, opts, true));
     let gpu_s = match gpu {

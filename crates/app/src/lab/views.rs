@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{AnyGrid, GridConfig, Traversal, structure};
+use gridrt_grid::{AnyGrid, GridConfig, structure};
 use gridrt_scene::rays::{image_rays, image_size, random_rays};
 use gridrt_scene::{Aabb, Camera, Hit, Ray};
 use serde::Serialize;
@@ -74,7 +74,7 @@ pub fn hit_share(hits: &[Hit]) -> f64 {
 /// A `w`×`h` probe image of `cam` traced through `probe`: its rays and their hits.
 fn probe_image(tris: &[[Vec3; 3]], probe: &AnyGrid, cam: &Camera, w: u32, h: u32) -> (Vec<Ray>, Vec<Hit>) {
     let rays = image_rays(cam, w, h);
-    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
+    let opts = TraceOptions::MAILBOX;
     let (hits, _) = probe.trace_batch(tris, &rays, opts, true);
     (rays, hits)
 }

@@ -9,9 +9,9 @@ use gridrt_gpu::cpu::{camera_rays, gpu_camera, shadow_ray};
 use gridrt_gpu::render::shade_params;
 use gridrt_gpu::trace::tile_quantum;
 use gridrt_gpu::{FrameTarget, GpuSession, RenderOptions, View};
-use gridrt_grid::{GridConfig, GridKind, Query, TraceOptions, Traversal, structure};
+use gridrt_grid::{GridConfig, GridKind, TraceOptions, structure};
 use gridrt_scene::procedural::{SceneKind, generate};
-use gridrt_scene::{Aabb, Camera, Hit, Ray};
+use gridrt_scene::{Aabb, Camera, Hit};
 
 use super::common::{default_scene, gpu, read_texture};
 
@@ -32,10 +32,6 @@ fn cameras(b: &Aabb) -> Vec<Camera> {
     });
     v
 }
-
-/// Amanatides–Woo with the mailbox, closest hits.
-const MAILBOX: TraceOptions =
-    TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, query: Query::Closest };
 
 fn differing(a: &[Hit], b: &[Hit]) -> usize {
     a.iter().zip(b).filter(|(x, y)| !x.same_bits(y)).count()
@@ -77,19 +73,19 @@ fn packet_kernels_equal_single_ray_kernels_bit_for_bit() {
                     // Shadow rays from the hits to the light (common end, scattered origins).
                     let shade = shade_params(&b, &opts);
                     let shadow: Vec<_> = rays.iter().zip(&single).map(|(r, h)| shadow_ray(&shade, r, h)).collect();
-                    let (s1, _) = gpu.trace(&gs, &shadow, MAILBOX).unwrap();
-                    let (s2, _) = gpu.trace_image(&gs, &shadow, w, MAILBOX).unwrap();
+                    let (s1, _) = gpu.trace(&gs, &shadow, TraceOptions::MAILBOX).unwrap();
+                    let (s2, _) = gpu.trace_image(&gs, &shadow, w, TraceOptions::MAILBOX).unwrap();
                     assert_eq!(differing(&s1, &s2), 0, "{name}: shadow rays");
                     // Occlusion queries (the renderer's shadow pass): hit or miss as the closest
                     // query, in both kernels, also on segments ending at and around the hits.
                     let mut segments = shadow.clone();
                     for end in [f32::next_down, |t| t, f32::next_up] {
-                        segments.extend(shadow.iter().zip(&s1).map(|(r, h)| {
-                            if h.is_hit() { Ray::new(r.o(), r.d(), r.tmin, end(h.t).max(r.tmin)) } else { *r }
-                        }));
+                        segments.extend(
+                            shadow.iter().zip(&s1).map(|(r, h)| if h.is_hit() { r.ending_at(end(h.t)) } else { *r }),
+                        );
                     }
-                    let (closest, _) = gpu.trace(&gs, &segments, MAILBOX).unwrap();
-                    let any = MAILBOX.occlusion();
+                    let (closest, _) = gpu.trace(&gs, &segments, TraceOptions::MAILBOX).unwrap();
+                    let any = TraceOptions::MAILBOX.occlusion();
                     let (a1, _) = gpu.trace(&gs, &segments, any).unwrap();
                     let (a2, _) = gpu.trace_image(&gs, &segments, w, any).unwrap();
                     for (what, got) in [("single", &a1), ("packets", &a2)] {

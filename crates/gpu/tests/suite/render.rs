@@ -6,7 +6,7 @@ use gridrt_gpu::render::{MAX_TILE_PIXELS, shade_params, tile_limit};
 use gridrt_gpu::trace::tile_quantum;
 use gridrt_gpu::{FrameTarget, RenderOptions, View};
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{GridConfig, GridKind, Traversal, structure};
+use gridrt_grid::{GridConfig, GridKind, structure};
 
 use super::common::{default_scene, gpu, read_texture};
 
@@ -24,12 +24,7 @@ fn default_scene_renders_deterministically_and_matches_the_cpu() {
         let a = gpu.render(&gs, &opts).unwrap();
         let b = gpu.render(&gs, &opts).unwrap();
         assert_eq!(a.rgba, b.rgba, "{kind}: two renders differ");
-        let (cpu_hits, _) = grid.trace_batch(
-            &tris,
-            &cpu_rays,
-            TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() },
-            true,
-        );
+        let (cpu_hits, _) = grid.trace_batch(&tris, &cpu_rays, TraceOptions::MAILBOX, true);
         let same = a.hits.iter().zip(&cpu_hits).filter(|(g, c)| g.triangle == c.triangle).count();
         let share = same as f64 / cpu_hits.len() as f64;
         let hit_pixels = cpu_hits.iter().filter(|h| h.is_hit()).count();
@@ -70,12 +65,7 @@ fn frames_larger_than_a_tile_render_exactly() {
     let frame = gpu.render(&gs, &opts).unwrap();
     assert_eq!((frame.hits.len(), frame.rgba.len()), ((w * h) as usize, (w * h * 4) as usize));
     let rays = camera_rays(&gpu_camera(&opts.camera, w, h));
-    let (cpu_hits, _) = grid.trace_batch(
-        &tris,
-        &rays,
-        TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() },
-        true,
-    );
+    let (cpu_hits, _) = grid.trace_batch(&tris, &rays, TraceOptions::MAILBOX, true);
     let same = frame.hits.iter().zip(&cpu_hits).filter(|(g, c)| g.triangle == c.triangle).count();
     println!("{w}x{h} in tiles of {}: {same} of {} pixels agree with the CPU", tile_limit(ctx), w * h);
     assert!(same as f64 >= 0.999 * cpu_hits.len() as f64, "{same} of {} pixels agree", cpu_hits.len());
@@ -120,7 +110,7 @@ fn display_target_texture_totals_and_shading_match_the_cpu_ports() {
     assert!(FrameTarget::new(ctx, w, h, false).unwrap().display_view().is_none());
     let cam = gpu_camera(&camera, w, h);
     let rays = camera_rays(&cam);
-    let topts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
+    let topts = TraceOptions::MAILBOX;
     let (cpu_hits, _) = grid.trace_batch(&tris, &rays, topts, true);
     for view in View::ALL {
         let opts = RenderOptions { view, ..fitted };

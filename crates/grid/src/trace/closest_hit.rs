@@ -22,9 +22,11 @@ use serde::{Deserialize, Serialize};
 use crate::mailbox::Mailbox;
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
+use crate::trace::TraceOptions;
 use crate::triangle::{closer, intersect};
 
-/// What a search looks for (`--query`; the WGSL twin is `QUERY_*` in closest_hit.wgsl).
+/// What a search looks for ([`TraceOptions::query`]; the WGSL twin is `params.query`, `QUERY_*`
+/// in shaders/shared/types.wgsl). Shadow rays are [`Query::Any`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Query {
     /// The closest hit by (t, triangle index): bit-identical across structures.
@@ -118,8 +120,7 @@ fn prefetch(tris: &[[Vec3; 3]], i: u32) {
 pub fn closest_hit(
     tris: &[[Vec3; 3]],
     ray: &Ray,
-    mailbox: bool,
-    query: Query,
+    opts: TraceOptions,
     walk: impl FnOnce(&mut ClosestHit),
 ) -> (Hit, RayStats) {
     let Some(pr) = PreparedRay::new(ray) else {
@@ -130,8 +131,8 @@ pub fn closest_hit(
         ray: pr,
         best: Hit::MISS,
         stats: RayStats::default(),
-        mailbox: mailbox.then(Mailbox::default),
-        any: query == Query::Any,
+        mailbox: opts.mailbox.then(Mailbox::default),
+        any: opts.query == Query::Any,
     };
     walk(&mut search);
     (search.best, search.stats)

@@ -22,6 +22,11 @@ pub struct TraceOptions {
 }
 
 impl TraceOptions {
+    /// Amanatides–Woo with the mailbox, closest hits: what the benchmarks, probes and renders
+    /// trace with unless told otherwise.
+    pub const MAILBOX: TraceOptions =
+        TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, query: Query::Closest };
+
     /// These options for an occlusion query ([`Query::Any`]).
     pub fn occlusion(self) -> TraceOptions {
         TraceOptions { query: Query::Any, ..self }
@@ -31,7 +36,7 @@ impl TraceOptions {
 /// Closest hit (or any hit, by `opts.query`) of `ray` in `grid` over `tris` (the triangles the
 /// grid was built from).
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
-    closest_hit(tris, ray, opts.mailbox, opts.query, |search| {
+    closest_hit(tris, ray, opts, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
         walk(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| grid.visit(search, index, t_exit));
     })

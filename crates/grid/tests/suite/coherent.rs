@@ -134,7 +134,7 @@ fn check_scene_images(name: &str, tris: &[[Vec3; 3]], width: u32, height: u32) {
             let around: Vec<Ray> = shadow
                 .iter()
                 .zip(&shadow_expected)
-                .map(|(r, h)| if h.is_hit() { Ray::new(r.o(), r.d(), r.tmin, end(h.t).max(r.tmin)) } else { *r })
+                .map(|(r, h)| if h.is_hit() { r.ending_at(end(h.t)) } else { *r })
                 .collect();
             let (around_expected, _) = reference(tris, &around);
             for grid in &grids {

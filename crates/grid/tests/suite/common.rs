@@ -60,14 +60,19 @@ pub fn reference(tris: &[[Vec3; 3]], rays: &[Ray]) -> (Vec<Hit>, BatchStats) {
 /// Asserts bit-exact equality of two hit lists, naming the first differences.
 pub fn assert_same_hits(what: &str, rays: &[Ray], expected: &[Hit], got: &[Hit]) {
     assert_eq!(expected.len(), got.len());
-    let bad: Vec<usize> = (0..expected.len()).filter(|&i| !expected[i].same_bits(&got[i])).collect();
+    let bad = (0..expected.len()).filter(|&i| !expected[i].same_bits(&got[i]));
+    fail_on(&format!("{what}: rays differ from brute force"), bad, rays, |i| {
+        format!("expected {:?}, got {:?}", expected[i], got[i])
+    });
+}
+
+/// Panics when `bad` names any ray, with their count and the first five (each described by
+/// `show`).
+fn fail_on(what: &str, bad: impl Iterator<Item = usize>, rays: &[Ray], show: impl Fn(usize) -> String) {
+    let bad: Vec<usize> = bad.collect();
     if !bad.is_empty() {
-        let show: Vec<String> = bad
-            .iter()
-            .take(5)
-            .map(|&i| format!("ray {i} {:?}: expected {:?}, got {:?}", rays[i], expected[i], got[i]))
-            .collect();
-        panic!("{what}: {} of {} rays differ from brute force:\n{}", bad.len(), rays.len(), show.join("\n"));
+        let first: Vec<String> = bad.iter().take(5).map(|&i| format!("ray {i} {:?}: {}", rays[i], show(i))).collect();
+        panic!("{what}: {} of {}:\n{}", bad.len(), rays.len(), first.join("\n"));
     }
 }
 
@@ -80,17 +85,11 @@ pub fn assert_same_occlusion(what: &str, tris: &[[Vec3; 3]], rays: &[Ray], expec
         let Some(pr) = PreparedRay::new(r) else { return false };
         tris.get(h.triangle as usize).and_then(|t| intersect(&pr, t)).is_some_and(|th| th.t.to_bits() == h.t.to_bits())
     };
-    let bad: Vec<usize> = (0..expected.len())
-        .filter(|&i| expected[i].is_hit() != got[i].is_hit() || (got[i].is_hit() && !real(&rays[i], &got[i])))
-        .collect();
-    if !bad.is_empty() {
-        let show: Vec<String> = bad
-            .iter()
-            .take(5)
-            .map(|&i| format!("ray {i} {:?}: closest {:?}, any {:?}", rays[i], expected[i], got[i]))
-            .collect();
-        panic!("{what}: {} of {} occlusion answers are wrong:\n{}", bad.len(), rays.len(), show.join("\n"));
-    }
+    let bad = (0..expected.len())
+        .filter(|&i| expected[i].is_hit() != got[i].is_hit() || (got[i].is_hit() && !real(&rays[i], &got[i])));
+    fail_on(&format!("{what}: occlusion answers are wrong"), bad, rays, |i| {
+        format!("closest {:?}, any {:?}", expected[i], got[i])
+    });
 }
 
 /// Segments that end just before, exactly at and just after each ray's closest hit in
@@ -102,9 +101,7 @@ pub fn segments_around_hits(rays: &[Ray], expected: &[Hit]) -> Vec<Ray> {
             out.push(*r);
             continue;
         }
-        for tmax in [h.t.next_down(), h.t, h.t.next_up()] {
-            out.push(Ray::new(r.o(), r.d(), r.tmin, tmax.max(r.tmin)));
-        }
+        out.extend([h.t.next_down(), h.t, h.t.next_up()].map(|t| r.ending_at(t)));
     }
     out
 }

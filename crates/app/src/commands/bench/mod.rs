@@ -18,9 +18,7 @@ pub mod targets;
 use glam::Vec3;
 use gridrt_gpu::GpuContext;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{
-    AnyGrid, CostModel, GridConfig, GridKind, InsertMode, PacketOptions, Resolution, Traversal, structure,
-};
+use gridrt_grid::{AnyGrid, CostModel, GridConfig, GridKind, InsertMode, PacketOptions, Resolution, structure};
 use gridrt_scene::{Hit, Ray};
 use serde::Serialize;
 
@@ -170,7 +168,7 @@ impl Built {
     fn trace(&self, tris: &[[Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
         match self {
             Built::Grid(g, _) => {
-                let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
+                let opts = TraceOptions::MAILBOX;
                 g.trace_batch(tris, rays, opts, true).0
             }
             #[cfg(feature = "peers")]
@@ -194,10 +192,6 @@ struct Measured {
 /// Build rounds per scene at least (`--repeat` when larger): builds are cheap next to the
 /// traces, and their ratios need more rounds than the traces' to settle.
 const BUILD_ROUNDS: usize = 5;
-
-/// The GPU rows' trace: Amanatides–Woo with the mailbox, closest hits.
-const GPU_TRACE: TraceOptions =
-    TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, query: gridrt_grid::Query::Closest };
 
 /// Measures every subject on one scene, on every ray set; the grids that walk packets also in
 /// `--tile` packets on the camera sets (a row of their own, family "grid packets").
@@ -249,8 +243,8 @@ fn bench_scene(
                 let gs = gpu.upload(g)?;
                 let rays = &batch.rays;
                 // Untimed warm-up: pipeline creation and first upload.
-                gpu.trace(&gs, &rays[..rays.len().min(64)], GPU_TRACE)?;
-                let (s, r) = best_of(args.repeat as usize, || gpu.trace(&gs, rays, GPU_TRACE));
+                gpu.trace(&gs, &rays[..rays.len().min(64)], TraceOptions::MAILBOX)?;
+                let (s, r) = best_of(args.repeat as usize, || gpu.trace(&gs, rays, TraceOptions::MAILBOX));
                 r?;
                 gpu_mrays = Some(rays.len() as f64 / s / 1e6);
             }
@@ -262,7 +256,7 @@ fn bench_scene(
         if let Built::Grid(g, _) = &built
             && g.has_packets()
         {
-            let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
+            let opts = TraceOptions::MAILBOX;
             let packet_opts = PacketOptions { tile: args.tile, mailbox: true };
             let mut packets = Measured {
                 structure: format!("{}, {t}×{t} packets", subject.name(), t = args.tile),
@@ -367,7 +361,7 @@ fn auto_check(sc: &LabScene, sets: &[RayBatch], args: &BenchArgs, cost: &CostMod
         cfg.build.parallel,
     )
     .resolution;
-    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
+    let opts = TraceOptions::MAILBOX;
     let mut out = Vec::new();
     for k in -4i32..=4 {
         let f = 2f64.powf(k as f64 / 4.0);

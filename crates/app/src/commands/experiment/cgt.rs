@@ -8,7 +8,7 @@
 
 use gridrt_gpu::render::{RenderOptions, shade_params};
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{AnyGrid, GridConfig, GridKind, PacketOptions, Traversal, structure};
+use gridrt_grid::{AnyGrid, GridConfig, GridKind, PacketOptions, structure};
 use gridrt_scene::Ray;
 use serde::Serialize;
 
@@ -86,7 +86,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
 /// Primary rays of one image and their shadow rays (occlusion queries), traced as single rays
 /// and in packets of each tile size; each packet row's hits checked against single rays'.
 fn measure_image(sc: &LabScene, grid: &AnyGrid, opts: &RenderOptions, tiles: &[u32], repeat: usize) -> Vec<Row> {
-    let topts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, ..Default::default() };
+    let topts = TraceOptions::MAILBOX;
     let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&opts.camera, opts.width, opts.height));
     let shade = shade_params(&sc.bounds, opts);
     let width = opts.width as usize;
