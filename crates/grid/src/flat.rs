@@ -49,18 +49,22 @@ impl FlatGrid {
     /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]` (the
     /// builds' table of M + 1 offsets), stored compactly: the empty cells' offsets are dropped.
     pub fn new(geom: GridGeometry, cell_start: Vec<u32>, refs: Vec<u32>) -> FlatGrid {
-        FlatGrid::compact(geom, &cell_start, refs, Vec::new(), Vec::new())
+        FlatGrid::compact(geom, &cell_start, refs)
     }
 
-    /// [`FlatGrid::new`] writing the occupancy words and offsets into `occupied` and
-    /// `ref_start` (their old contents are dropped, their memory reused).
-    fn compact(
+    /// The grid of its arrays, as the parallel build writes them directly.
+    #[cfg(feature = "parallel")]
+    pub(crate) fn from_parts(
         geom: GridGeometry,
-        cell_start: &[u32],
+        occupied: Vec<OccupancyWord>,
+        ref_start: Vec<u32>,
         refs: Vec<u32>,
-        mut occupied: Vec<OccupancyWord>,
-        mut ref_start: Vec<u32>,
     ) -> FlatGrid {
+        FlatGrid { geom, occupied, ref_start, refs }
+    }
+
+    /// [`FlatGrid::new`]'s occupancy words and offsets of a table of M + 1 offsets.
+    fn compact(geom: GridGeometry, cell_start: &[u32], refs: Vec<u32>) -> FlatGrid {
         let cells = cell_start.len().saturating_sub(1);
         // Word k holds cells 32k … 32k + 31: 33 offsets, compared pairwise.
         let bits = |k: usize| {
@@ -82,7 +86,7 @@ impl FlatGrid {
         };
         // Words per parallel chunk (128k cells).
         const CHUNK: usize = 4096;
-        occupied.clear();
+        let mut occupied = Vec::with_capacity(words);
         #[cfg(feature = "parallel")]
         {
             use rayon::prelude::*;
@@ -95,8 +99,7 @@ impl FlatGrid {
             w.rank = rank;
             rank += w.bits.count_ones();
         }
-        ref_start.clear();
-        ref_start.resize(rank as usize + 1, 0);
+        let mut ref_start = vec![0; rank as usize + 1];
         ref_start[rank as usize] = refs.len() as u32;
         // Chunk c's occupied cells go to ref_start[rank of its first word ..].
         let chunk_rank = |c: usize| occupied.get(c * CHUNK).map_or(rank, |w| w.rank) as usize;
@@ -228,11 +231,7 @@ impl FlatGrid {
         }
         #[cfg(feature = "parallel")]
         if opts.parallel {
-            let (cell_start, refs) = crate::build::parallel::bucket_reusing(tris, &geom, opts.insert, times, scratch)?;
-            let (occupied, ref_start) = (std::mem::take(&mut scratch.occupied), std::mem::take(&mut scratch.ref_start));
-            let grid = times.record("cell bits", || FlatGrid::compact(geom, &cell_start, refs, occupied, ref_start));
-            scratch.cell_table = cell_start;
-            return Ok(grid);
+            return crate::build::parallel::flat_grid_reusing(tris, &geom, opts.insert, times, scratch);
         }
         let _ = scratch;
         let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;

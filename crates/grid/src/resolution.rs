@@ -260,7 +260,7 @@ pub fn best_sample(curve: &[CostSample]) -> Option<&CostSample> {
 
 /// Above this many triangles, guess-and-check estimates N_m for bounding-box insertion from a
 /// sample instead of counting every triangle at every sampled m (see [`count_refs_curve`]).
-pub const EXACT_COUNT_LIMIT: usize = 1 << 14;
+pub const EXACT_COUNT_LIMIT: usize = 1 << 12;
 
 /// A grid's constants for counting the cells of a triangle's bounding box.
 #[derive(Clone, Copy, Debug)]

@@ -51,14 +51,12 @@ impl PhaseTimes {
 }
 
 /// The arrays a flat build can take over from the one before it, for a grid rebuilt every frame:
-/// its M + 1 table and, handed back with [`BuildScratch::recycle`], the previous grid's arrays.
+/// handed back with [`BuildScratch::recycle`], the previous grid's arrays.
 /// Their memory is already mapped, so a rebuild does not pay its page faults again (about 2 µs
 /// per 4 KiB page on a VM; a 1M-triangle scene's build touches ~100 MB). Used by the parallel
 /// build; the result is the same as a build from nothing.
 #[derive(Debug, Default)]
 pub struct BuildScratch {
-    #[cfg_attr(not(feature = "parallel"), allow(dead_code))]
-    pub(crate) cell_table: Vec<u32>,
     pub(crate) refs: Vec<u32>,
     pub(crate) occupied: Vec<crate::flat::OccupancyWord>,
     pub(crate) ref_start: Vec<u32>,

@@ -1,41 +1,21 @@
-//! The parallel bucketing of a flat grid: the grid is split into slabs of z layers (contiguous
-//! ranges of cells, so of `cell_start` and `refs` too); triangles are binned by the slabs they
-//! touch, in increasing order, and each slab counts and scatters its own cells without atomics.
-//! The output is therefore bit-identical to the serial [`super::bucket::bucket`], with no sort.
-//! Slabs are thin enough (at most [`SLAB_CELLS`]) that a slab's part of the cell table stays in
-//! cache, and each triangle's cell range is prepared once and copied into the slabs it meets,
-//! so a slab reads its triangles in sequence.
+//! The parallel build of a flat grid: the grid is split into slabs of z layers (contiguous
+//! ranges of cells, so of the occupied cells' offsets and of `refs` too); triangles are binned
+//! by the slabs they touch, in increasing order, and each slab counts and scatters its own
+//! cells without atomics. The output is therefore bit-identical to the serial
+//! [`super::bucket::bucket`] compacted by [`FlatGrid::new`], with no sort.
+//! Slabs are thin enough (at most [`SLAB_CELLS`]) that a slab's table of counts, a per-thread
+//! table reused between builds, stays in cache; a slab keeps only its occupied cells' counts,
+//! so no array of M entries is written but the occupancy bits. Each triangle's cell range is
+//! prepared once and copied into the slabs it meets, so a slab reads its triangles in sequence.
 
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
 use super::{PhaseTimes, check_refs, split_lengths};
 use crate::BuildError;
+use crate::flat::{FlatGrid, WORD_CELLS};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES};
 use crate::insert::{InsertMode, box_cell_range, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
-
-/// In-place inclusive prefix sum of `counts` in two parallel passes (chunk sums, then each
-/// chunk's running sum from its offset); returns the total.
-fn par_inclusive_scan(counts: &mut [u32]) -> Result<u64, BuildError> {
-    const CHUNK: usize = 1 << 16;
-    let sums: Vec<u64> = counts.par_chunks(CHUNK).map(|c| c.iter().map(|&x| x as u64).sum()).collect();
-    let mut offsets = Vec::with_capacity(sums.len());
-    let mut total = 0u64;
-    for s in sums {
-        offsets.push(total);
-        total += s;
-    }
-    check_refs(total)?;
-    counts.par_chunks_mut(CHUNK).zip(offsets).for_each(|(c, offset)| {
-        // Fits: every partial sum is at most `total` ≤ MAX_REFS < 2³².
-        let mut acc = offset as u32;
-        for x in c {
-            acc += *x;
-            *x = acc;
-        }
-    });
-    Ok(total)
-}
 
 /// The cells triangle `tri` (prepared cell range `cells`) goes into within `layers`: the range
 /// itself for bounding-box insertion, else the exact test.
@@ -94,15 +74,15 @@ struct SlabBins {
 /// Most cells in one slab: 128k cells, 512 KiB of the cell table.
 const SLAB_CELLS: usize = 1 << 17;
 
-/// [`super::bucket::bucket`] over all of `tris` on all threads, with the same output, written
-/// into `scratch`'s M + 1 table and references (taken out of it; their memory reused).
-pub fn bucket_reusing(
+/// The flat grid of [`super::bucket::bucket`] over all of `tris` on all threads, bit-identical
+/// to the serial build's, written into `scratch`'s arrays (taken out of it; their memory reused).
+pub fn flat_grid_reusing(
     tris: &[[Vec3; 3]],
     geom: &GridGeometry,
     mode: InsertMode,
     times: &mut PhaseTimes,
     scratch: &mut super::BuildScratch,
-) -> Result<(Vec<u32>, Vec<u32>), BuildError> {
+) -> Result<FlatGrid, BuildError> {
     let geom = *geom;
     let cells = geom.cell_count() as usize;
     let layer = geom.res.x as usize * geom.res.y as usize;
@@ -198,52 +178,188 @@ pub fn bucket_reusing(
     drop(boxes);
     let in_slab =
         |s: usize| bins.iter().flat_map(move |b| b.items[b.start[s] as usize..b.start[s + 1] as usize].iter().copied());
-    let slab_cells = |s: usize| (edge[s + 1] - edge[s]) as usize * layer;
-    // `offsets` becomes `cell_start` in place (Lagae & Dutré): counts, then their inclusive
-    // prefix sum (each cell's end), then the scatter decrements each cell's end once per
-    // reference, filling the cell backwards, so each entry ends at its cell's start. No
-    // cursor array, no second M-sized allocation.
-    // Both zero-filled on all threads (see `refill_par`); the time is the phase's that needs it.
-    let mut offsets = std::mem::take(&mut scratch.cell_table);
-    times.record("count", || super::refill_par(&mut offsets, cells + 1, "the cell table"))?;
-    times.record("count", || {
-        split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells)).into_par_iter().enumerate().for_each(
-            |(s, part)| {
-                let base = edge[s] as usize * layer;
-                for (i, b) in in_slab(s) {
-                    let layers = edge[s]..edge[s + 1];
-                    cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers, |c| part[c - base] += 1);
-                }
-            },
-        )
-    });
-    let total = times.record("scan", || par_inclusive_scan(&mut offsets[..cells]))?;
-    offsets[cells] = total as u32;
-    let mut refs = std::mem::take(&mut scratch.refs);
-    times.record("scatter", || super::refill_par(&mut refs, total as usize, "triangle references"))?;
-    times.record("scatter", || {
-        // A slab's references start where the cell before it ends.
-        let slab_start = |s: usize| {
-            let base = edge[s] as usize * layer;
-            if base == 0 { 0 } else { offsets[base - 1] as usize }
-        };
-        let ref_bounds: Vec<usize> =
-            (0..=slabs).map(|s| if s == slabs { total as usize } else { slab_start(s) }).collect();
-        let ref_parts = split_lengths(&mut refs, ref_bounds.windows(2).map(|w| w[1] - w[0]));
-        let end_parts = split_lengths(&mut offsets[..cells], (0..slabs).map(slab_cells));
-        ref_parts.into_par_iter().zip(end_parts).enumerate().for_each(|(s, (out, end))| {
-            let base = edge[s] as usize * layer;
-            let ref_base = ref_bounds[s] as u32;
-            // Backwards, so that each cell, filled from its end, holds increasing indices.
-            for (i, b) in in_slab(s).rev() {
+    let slab_base: Vec<usize> = edge.iter().map(|&z| z as usize * layer).collect();
+    // Each slab counts its cells' references in a table of its own (in cache, reused between
+    // builds) and keeps only which of its cells are occupied and their counts: no M-sized
+    // table, no pass over every cell but the slab's own.
+    let counted: Vec<SlabCounts> = times.record("count", || {
+        (0..slabs)
+            .into_par_iter()
+            .map(|s| {
+                let base = slab_base[s];
                 let layers = edge[s]..edge[s + 1];
-                cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers, |c| {
-                    let e = &mut end[c - base];
-                    *e -= 1;
-                    out[(*e - ref_base) as usize] = i;
-                });
+                with_slab_table(slab_base[s + 1] - base, true, |table| {
+                    for (i, b) in in_slab(s) {
+                        cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |c| {
+                            table[c - base] += 1
+                        });
+                    }
+                    SlabCounts::of(table)
+                })
+            })
+            .collect()
+    });
+    // Where each slab's references and occupied cells start.
+    let mut ref_base = Vec::with_capacity(slabs + 1);
+    let mut occupied_base = Vec::with_capacity(slabs + 1);
+    let (mut refs_total, mut occupied_total) = (0u64, 0usize);
+    for c in &counted {
+        ref_base.push(refs_total as usize);
+        occupied_base.push(occupied_total);
+        refs_total += c.refs;
+        occupied_total += c.counts.len();
+    }
+    check_refs(refs_total)?;
+    let total = refs_total as usize;
+    ref_base.push(total);
+    occupied_base.push(occupied_total);
+    let mut occupied = std::mem::take(&mut scratch.occupied);
+    let mut ref_start = std::mem::take(&mut scratch.ref_start);
+    times.record("cell bits", || -> Result<(), BuildError> {
+        // Word k holds cells 32k … 32k + 31, which may lie in several slabs.
+        let words = cells.div_ceil(WORD_CELLS);
+        super::refill_par(&mut occupied, words, "the occupancy words")?;
+        const CHUNK: usize = 4096;
+        occupied.par_chunks_mut(CHUNK).enumerate().for_each(|(k0, part)| {
+            let mut s = slab_base.partition_point(|&b| b <= k0 * CHUNK * WORD_CELLS) - 1;
+            for (j, w) in part.iter_mut().enumerate() {
+                let first = (k0 * CHUNK + j) * WORD_CELLS;
+                let end = (first + WORD_CELLS).min(cells);
+                let mut c = first;
+                while c < end {
+                    while slab_base[s + 1] <= c {
+                        s += 1;
+                    }
+                    let len = end.min(slab_base[s + 1]) - c;
+                    w.bits |= counted[s].bits_at(c - slab_base[s], len) << (c - first);
+                    c += len;
+                }
             }
         });
+        let mut rank = 0u32;
+        for w in &mut occupied {
+            w.rank = rank;
+            rank += w.bits.count_ones();
+        }
+        super::refill_par(&mut ref_start, occupied_total + 1, "the cell offsets")?;
+        ref_start[occupied_total] = total as u32;
+        split_lengths(&mut ref_start[..occupied_total], counted.iter().map(|c| c.counts.len()))
+            .into_par_iter()
+            .zip(&counted)
+            .zip(&ref_base)
+            .for_each(|((out, c), &first)| {
+                // Fits: every start is at most `total` ≤ MAX_REFS < 2³².
+                let mut acc = first as u32;
+                for (o, &n) in out.iter_mut().zip(&c.counts) {
+                    *o = acc;
+                    acc += n;
+                }
+            });
+        Ok(())
+    })?;
+    let mut refs = std::mem::take(&mut scratch.refs);
+    times.record("scatter", || super::refill_par(&mut refs, total, "triangle references"))?;
+    times.record("scatter", || {
+        split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0])).into_par_iter().enumerate().for_each(
+            |(s, out)| {
+                let base = slab_base[s];
+                let layers = edge[s]..edge[s + 1];
+                // Each occupied cell's next free place in the slab's references; empty cells
+                // are never written, so the table needs no clearing.
+                with_slab_table(slab_base[s + 1] - base, false, |next| {
+                    counted[s].starts_into(next);
+                    for (i, b) in in_slab(s) {
+                        cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |c| {
+                            let e = &mut next[c - base];
+                            out[*e as usize] = i;
+                            *e += 1;
+                        });
+                    }
+                })
+            },
+        );
     });
-    Ok((offsets, refs))
+    Ok(FlatGrid::from_parts(geom, occupied, ref_start, refs))
+}
+
+/// What the count of one slab keeps: which of its cells hold references (bit i of word i / 32:
+/// the slab's cell i) and how many, per occupied cell in order.
+struct SlabCounts {
+    bits: Vec<u32>,
+    counts: Vec<u32>,
+    refs: u64,
+}
+
+impl SlabCounts {
+    /// The occupied cells of a slab's table of counts.
+    fn of(table: &[u32]) -> SlabCounts {
+        let mut bits = Vec::with_capacity(table.len().div_ceil(WORD_CELLS));
+        let mut counts = Vec::new();
+        for chunk in table.chunks(WORD_CELLS) {
+            // A whole word's flags in a loop of fixed length, which compiles to SIMD compares.
+            let w = match <&[u32; WORD_CELLS]>::try_from(chunk) {
+                Ok(a) => (0..WORD_CELLS).fold(0u32, |w, j| w | ((a[j] != 0) as u32) << j),
+                Err(_) => chunk.iter().enumerate().fold(0u32, |w, (j, &n)| w | ((n != 0) as u32) << j),
+            };
+            bits.push(w);
+            let mut b = w;
+            while b != 0 {
+                counts.push(chunk[b.trailing_zeros() as usize]);
+                b &= b - 1;
+            }
+        }
+        let refs = counts.iter().map(|&n| n as u64).sum();
+        SlabCounts { bits, counts, refs }
+    }
+
+    /// The occupancy of the slab's cells `from .. from + len` (`len` ≤ 32), cell `from` in bit 0.
+    #[inline]
+    fn bits_at(&self, from: usize, len: usize) -> u32 {
+        let (k, o) = (from / WORD_CELLS, from % WORD_CELLS);
+        let lo = self.bits[k] as u64;
+        let hi = self.bits.get(k + 1).map_or(0, |&w| w as u64);
+        let v = (lo | hi << 32) >> o;
+        (v & ((1u64 << len) - 1)) as u32
+    }
+
+    /// Each occupied cell's first reference, relative to the slab's first, into `table`.
+    fn starts_into(&self, table: &mut [u32]) {
+        let mut acc = 0u32;
+        let mut n = self.counts.iter();
+        for (k, &w) in self.bits.iter().enumerate() {
+            let mut b = w;
+            while b != 0 {
+                table[k * WORD_CELLS + b.trailing_zeros() as usize] = acc;
+                acc += n.next().expect("a count per occupied cell");
+                b &= b - 1;
+            }
+        }
+    }
+}
+
+/// Largest per-thread table a build keeps for the next one (1 MiB): a slab's is at most
+/// [`SLAB_CELLS`] cells unless a scene's slivers forced a few thick slabs.
+const KEPT_TABLE_CELLS: usize = 1 << 18;
+
+thread_local! {
+    static SLAB_TABLE: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` on a table of `cells` entries of this thread's, zeroed when `zero` (else holding
+/// whatever the last user left).
+fn with_slab_table<R>(cells: usize, zero: bool, f: impl FnOnce(&mut [u32]) -> R) -> R {
+    SLAB_TABLE.with(|t| {
+        let mut t = t.borrow_mut();
+        if t.len() < cells {
+            t.clear();
+            t.resize(cells, 0);
+        } else if zero {
+            t[..cells].fill(0);
+        }
+        let r = f(&mut t[..cells]);
+        if t.len() > KEPT_TABLE_CELLS {
+            *t = Vec::new();
+        }
+        r
+    })
 }

@@ -132,11 +132,15 @@ fn parallel_build_is_bit_identical_to_serial() {
     for kind in [SceneKind::Particles, SceneKind::Slivers, SceneKind::Mountain] {
         let tris = tris_of(kind, if kind == SceneKind::Mountain { 6 } else { 40_000 });
         // A few slabs, and (1.9M cells) many slabs of at most 128k cells each, with the
-        // triangles in several chunks.
+        // triangles in several chunks; layers of 6 and 15 cells, so that one occupancy word
+        // spans several slabs and slab edges fall inside words.
         for (insert, res) in [
             (InsertMode::BoundingBox, [37, 23, 41]),
             (InsertMode::Exact, [37, 23, 41]),
             (InsertMode::BoundingBox, [160, 120, 100]),
+            (InsertMode::BoundingBox, [3, 2, 4]),
+            (InsertMode::Exact, [3, 2, 4]),
+            (InsertMode::BoundingBox, [5, 3, 700]),
         ] {
             // Exact insertion is slow: half the triangles (still two chunks).
             let tris = if insert == InsertMode::Exact { &tris[..tris.len() / 2] } else { &tris[..] };
@@ -226,7 +230,8 @@ fn resolution_policies_follow_their_formulas() {
 
 #[test]
 fn guess_and_check_counts_exactly_and_picks_the_minimum() {
-    let tris = tris_of(SceneKind::Mountain, 6);
+    let tris = tris_of(SceneKind::Mountain, 5);
+    assert!(tris.len() <= resolution::EXACT_COUNT_LIMIT, "{} triangles are sampled", tris.len());
     let b = triangle_bounds(&tris);
     let model = CostModel::default();
     for insert in InsertMode::ALL {
