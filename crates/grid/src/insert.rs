@@ -139,14 +139,28 @@ pub fn for_each_cell_in_layers(
     layers: std::ops::Range<u32>,
     mut f: impl FnMut(usize),
 ) -> u32 {
+    for_each_run_in_layers(geom, g, mode, layers, |run| run.for_each(&mut f))
+}
+
+/// [`for_each_cell_in_layers`] a row at a time: `f(cells)` for each run of consecutive cell
+/// indices (part of one x row), in increasing order; returns how many cells.
+#[inline]
+pub fn for_each_run_in_layers(
+    geom: &GridGeometry,
+    g: &GridTriangle,
+    mode: InsertMode,
+    layers: std::ops::Range<u32>,
+    mut f: impl FnMut(std::ops::Range<usize>),
+) -> u32 {
     if mode == InsertMode::BoundingBox {
-        return for_each_box_cell_in_layers(geom, [g.lo, g.hi], layers, f);
+        return for_each_box_run_in_layers(geom, [g.lo, g.hi], layers, f);
     }
     let mut n = 0;
     let z_range = g.lo.z.max(layers.start)..=g.hi.z.min(layers.end.saturating_sub(1));
     if g.lo == g.hi {
         for z in z_range {
-            f(geom.cell_index(UVec3::new(g.lo.x, g.lo.y, z)));
+            let c = geom.cell_index(UVec3::new(g.lo.x, g.lo.y, z));
+            f(c..c + 1);
             n += 1;
         }
         return n;
@@ -171,9 +185,7 @@ pub fn for_each_cell_in_layers(
             let Some(x0) = (x0..=x1).find(|&x| overlaps(x, y, z)) else { continue };
             let x1 = (x0 + 1..=x1).rev().find(|&x| overlaps(x, y, z)).unwrap_or(x0);
             let row = geom.cell_index(UVec3::new(x0, y, z));
-            for c in row..=row + (x1 - x0) as usize {
-                f(c);
-            }
+            f(row..row + (x1 - x0 + 1) as usize);
             n += x1 - x0 + 1;
         }
     }
@@ -186,22 +198,23 @@ pub fn for_each_cell_in_layers(
 const BOUNDED_ROWS_FROM: u32 = 16;
 
 /// Bounding-box insertion of the cell range `[lo, hi]` (a [`prepare`]d triangle's), in the
-/// z layers `layers`: `f(cell_index)` in increasing order; returns how many.
+/// z layers `layers`: `f(cells)` for each x row of the box, in increasing order; returns how
+/// many cells.
 #[inline]
-pub fn for_each_box_cell_in_layers(
+pub fn for_each_box_run_in_layers(
     geom: &GridGeometry,
     [lo, hi]: [UVec3; 2],
     layers: std::ops::Range<u32>,
-    mut f: impl FnMut(usize),
+    mut f: impl FnMut(std::ops::Range<usize>),
 ) -> u32 {
     let mut n = 0;
-    for z in lo.z.max(layers.start)..=hi.z.min(layers.end.saturating_sub(1)) {
-        for y in lo.y..=hi.y {
-            let row = geom.cell_index(UVec3::new(lo.x, y, z));
-            for c in row..=row + (hi.x - lo.x) as usize {
-                f(c);
-            }
-            n += hi.x - lo.x + 1;
+    let len = (hi.x - lo.x + 1) as usize;
+    for z in lo.z.max(layers.start)..(hi.z + 1).min(layers.end) {
+        let mut row = geom.cell_index(UVec3::new(lo.x, lo.y, z));
+        for _ in lo.y..hi.y + 1 {
+            f(row..row + len);
+            row += geom.res.x as usize;
+            n += len as u32;
         }
     }
     n

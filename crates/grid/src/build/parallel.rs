@@ -15,26 +15,26 @@ use super::{PhaseTimes, check_refs, split_lengths};
 use crate::BuildError;
 use crate::flat::{FlatGrid, WORD_CELLS};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES};
-use crate::insert::{InsertMode, box_cell_range, for_each_box_cell_in_layers, for_each_cell_in_layers, prepare};
+use crate::insert::{InsertMode, box_cell_range, for_each_box_run_in_layers, for_each_run_in_layers, prepare};
 
-/// The cells triangle `tri` (prepared cell range `cells`) goes into within `layers`: the range
-/// itself for bounding-box insertion, else the exact test.
+/// The runs of cells triangle `tri` (prepared cell range `cells`) goes into within `layers`:
+/// the range's rows for bounding-box insertion, else the exact test's.
 #[inline(always)]
-fn cells_of_triangle(
+fn runs_of_triangle(
     geom: &GridGeometry,
     tri: &[Vec3; 3],
     cells: [UVec3; 2],
     mode: InsertMode,
     layers: std::ops::Range<u32>,
-    f: impl FnMut(usize),
+    f: impl FnMut(std::ops::Range<usize>),
 ) {
     match mode {
         InsertMode::BoundingBox => {
-            for_each_box_cell_in_layers(geom, cells, layers, f);
+            for_each_box_run_in_layers(geom, cells, layers, f);
         }
         InsertMode::Exact => {
             let g = prepare(geom, tri, INSERT_MARGIN_CELLS);
-            for_each_cell_in_layers(geom, &g, mode, layers, f);
+            for_each_run_in_layers(geom, &g, mode, layers, f);
         }
     }
 }
@@ -190,8 +190,8 @@ pub fn flat_grid_reusing(
                 let layers = edge[s]..edge[s + 1];
                 with_slab_table(slab_base[s + 1] - base, true, |table| {
                     for (i, b) in in_slab(s) {
-                        cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |c| {
-                            table[c - base] += 1
+                        runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |r| {
+                            table[r.start - base..r.end - base].iter_mut().for_each(|n| *n += 1)
                         });
                     }
                     SlabCounts::of(table)
@@ -269,10 +269,11 @@ pub fn flat_grid_reusing(
                 with_slab_table(slab_base[s + 1] - base, false, |next| {
                     counted[s].starts_into(next);
                     for (i, b) in in_slab(s) {
-                        cells_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |c| {
-                            let e = &mut next[c - base];
-                            out[*e as usize] = i;
-                            *e += 1;
+                        runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |r| {
+                            for e in &mut next[r.start - base..r.end - base] {
+                                out[*e as usize] = i;
+                                *e += 1;
+                            }
                         });
                     }
                 })
