@@ -100,25 +100,32 @@ fn grid_box_cells_scalar(lo: Vec3A, hi: Vec3A, res: UVec3, margin: f32) -> [UVec
 #[inline]
 fn grid_box_cells_a(lo: Vec3A, hi: Vec3A, res: UVec3, margin: f32) -> [UVec3; 2] {
     let n = i32x4::new([res.x as i32, res.y as i32, res.z as i32, 1]);
-    let (nf, last) = (n.round_float(), n - i32x4::splat(1));
-    let floor_frac = |x: Vec3A| {
-        // max(x, 0) gives 0 for NaN (its second operand), as f32::max does; then the values
-        // are in [0, n], where truncation is floor and the fraction is exact.
-        let c = f32x4::new(x.extend(0.0).to_array()).fast_max(f32x4::ZERO).fast_min(nf);
-        let i = c.fast_trunc_int();
-        (i, c - i.round_float())
-    };
-    // A true comparison is all ones (−1): adding it steps one cell down.
-    let mask = |m: f32x4| bytemuck::cast::<f32x4, i32x4>(m);
-    let (il, fl) = floor_frac(lo);
-    let down = mask(fl.simd_lt(f32x4::splat(margin))) & il.simd_gt(i32x4::ZERO);
-    let (ih, fh) = floor_frac(hi);
-    let up = mask(fh.simd_ge(f32x4::splat(1.0 - margin)));
+    let lanes = |v: Vec3A| f32x4::new(v.extend(0.0).to_array());
     let corner = |v: i32x4| {
-        let a = v.min(last).to_array();
+        let a = v.to_array();
         UVec3::new(a[0] as u32, a[1] as u32, a[2] as u32)
     };
-    [corner(il + down), corner(ih - up)]
+    [corner(cell_lanes(lanes(lo), n, false, margin)), corner(cell_lanes(lanes(hi), n, true, margin))]
+}
+
+/// The rule of [`grid_box_cells_scalar`] on four lanes, each a grid-space coordinate `x` on an
+/// axis of `n` cells: the lower (`upper` false) or upper cell within `margin`. The lanes are a
+/// grid's axes in [`grid_box_cells`], one axis of four grids in guess-and-check's counts.
+#[inline(always)]
+pub(crate) fn cell_lanes(x: f32x4, n: i32x4, upper: bool, margin: f32) -> i32x4 {
+    // max(x, 0) gives 0 for NaN (its second operand), as f32::max does; then the values are in
+    // [0, n], where truncation is floor and the fraction is exact.
+    let c = x.fast_max(f32x4::ZERO).fast_min(n.round_float());
+    let i = c.fast_trunc_int();
+    let frac = c - i.round_float();
+    // A true comparison is all ones (−1): adding it steps one cell down, subtracting one up.
+    let mask = |m: f32x4| bytemuck::cast::<f32x4, i32x4>(m);
+    let i = if upper {
+        i - mask(frac.simd_ge(f32x4::splat(1.0 - margin)))
+    } else {
+        i + (mask(frac.simd_lt(f32x4::splat(margin))) & i.simd_gt(i32x4::ZERO))
+    };
+    i.min(n - i32x4::splat(1))
 }
 
 /// Calls `f(cell_index)` for every cell `tri` is inserted into, in increasing index order

@@ -32,7 +32,8 @@ use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES, padded_bounds};
-use crate::insert::{InsertMode, cell_count, prepare};
+use crate::insert::{InsertMode, cell_count, cell_lanes, prepare};
+use wide::{f32x4, i32x4};
 
 /// [`CostModel::memory_aware`]'s cache: grids of a few KiB (tens of triangles) pay almost no
 /// memory term, grids of megabytes nearly all of it. Read the README's tables for the value.
@@ -262,27 +263,49 @@ pub fn best_sample(curve: &[CostSample]) -> Option<&CostSample> {
 /// sample instead of counting every triangle at every sampled m (see [`count_refs_curve`]).
 pub const EXACT_COUNT_LIMIT: usize = 1 << 12;
 
-/// A grid's constants for counting the cells of a triangle's bounding box.
-#[derive(Clone, Copy, Debug)]
+/// The constants of several grids (four a vector) for counting the cells of a triangle's
+/// bounding box in each, one axis of four grids at a time.
+#[derive(Clone, Debug)]
 struct BoxCounter {
-    inv: Vec3,
-    res: glam::UVec3,
+    /// Per group of four grids and per axis, the cells per unit of length, and the cells.
+    inv: Vec<[f32x4; 3]>,
+    res: Vec<[i32x4; 3]>,
 }
 
 impl BoxCounter {
-    fn new(geom: &GridGeometry) -> BoxCounter {
-        BoxCounter { inv: geom.inv_cell, res: geom.res }
+    fn new(grids: &[GridGeometry]) -> BoxCounter {
+        let (mut inv, mut res) = (Vec::new(), Vec::new());
+        for group in grids.chunks(4) {
+            // Padding lanes: a grid of one cell, where every box covers one cell.
+            inv.push(std::array::from_fn(|a| {
+                f32x4::new(std::array::from_fn(|j| group.get(j).map_or(0.0, |g| g.inv_cell[a])))
+            }));
+            res.push(std::array::from_fn(|a| {
+                i32x4::new(std::array::from_fn(|j| group.get(j).map_or(1, |g| g.res[a] as i32)))
+            }));
+        }
+        BoxCounter { inv, res }
     }
 
-    /// Cells the bounding box `[lo, hi]` covers, given relative to the grid's corner (`min` is
-    /// the same at every resolution, so callers subtract it once). Exactly [`prepare`]'s cells:
-    /// the per-axis map to grid space rounds monotonically, so mapping the box's corners gives
-    /// exactly the min and max of the mapped vertices.
+    /// Adds the cells the bounding box `[lo, hi]` (relative to the grids' common corner) covers
+    /// in each grid to `sums`: exactly [`prepare`]'s cells, by [`crate::insert::cell_lanes`], the
+    /// rule of every build (the per-axis map to grid space rounds monotonically, so mapping the
+    /// box's corners gives exactly the min and max of the mapped vertices).
     #[inline]
-    fn cells(&self, lo: Vec3, hi: Vec3) -> u64 {
-        let [l, h] = crate::insert::grid_box_cells(lo * self.inv, hi * self.inv, self.res, INSERT_MARGIN_CELLS as f32);
-        let e = h - l + glam::UVec3::ONE;
-        e.x as u64 * e.y as u64 * e.z as u64
+    fn add(&self, lo: Vec3, hi: Vec3, sums: &mut [u64]) {
+        let m = INSERT_MARGIN_CELLS as f32;
+        for (g, (inv, res)) in self.inv.iter().zip(&self.res).enumerate() {
+            let mut cells = i32x4::splat(1);
+            for a in 0..3 {
+                // At most MAX_AXIS_RES cells an axis: the product fits in 31 bits.
+                let l = cell_lanes(f32x4::splat(lo[a]) * inv[a], res[a], false, m);
+                let h = cell_lanes(f32x4::splat(hi[a]) * inv[a], res[a], true, m);
+                cells *= h - l + i32x4::splat(1);
+            }
+            for (s, c) in sums[4 * g..].iter_mut().zip(cells.to_array()) {
+                *s += c as u64;
+            }
+        }
     }
 }
 
@@ -353,13 +376,18 @@ pub fn count_refs_curve(
     parallel: bool,
 ) -> (Vec<u64>, usize) {
     let grids: Vec<GridGeometry> = resolutions.iter().map(|&r| GridGeometry::new(bounds, r)).collect();
-    let geoms: Vec<BoxCounter> = grids.iter().map(BoxCounter::new).collect();
-    // Cells triangle `t` (box `[lo, hi]` relative to the grid corner) goes into at resolution i.
-    let count = |i: usize, t: &[Vec3; 3], lo: Vec3, hi: Vec3| match mode {
-        InsertMode::BoundingBox => geoms[i].cells(lo, hi),
-        InsertMode::Exact => cell_count(&grids[i], &prepare(&grids[i], t, INSERT_MARGIN_CELLS), mode),
+    let boxes = BoxCounter::new(&grids);
+    // Adds the cells triangle `t` (box `[lo, hi]` relative to the grid corner) goes into at
+    // each resolution to `sums`.
+    let count = |t: &[Vec3; 3], lo: Vec3, hi: Vec3, sums: &mut [u64]| match mode {
+        InsertMode::BoundingBox => boxes.add(lo, hi, sums),
+        InsertMode::Exact => {
+            for (g, s) in grids.iter().zip(sums) {
+                *s += cell_count(g, &prepare(g, t, INSERT_MARGIN_CELLS), mode);
+            }
+        }
     };
-    let k = geoms.len();
+    let k = grids.len();
     if k == 0 {
         return (Vec::new(), tris.len());
     }
@@ -370,7 +398,7 @@ pub fn count_refs_curve(
         if stride == 1 {
             return None;
         }
-        let e = ((hi - lo) * geoms[0].inv).max_element() + 2.0 * INSERT_MARGIN_CELLS as f32;
+        let e = ((hi - lo) * grids[0].inv_cell).max_element() + 2.0 * INSERT_MARGIN_CELLS as f32;
         STRATUM_WIDTH.iter().position(|&w| e < w)
     };
     // `exact[s]`: stratum s is counted exactly (all of it) rather than sampled; `large`: the
@@ -391,9 +419,7 @@ pub fn count_refs_curve(
                     (&mut t.sampled[s], Some(s))
                 }
             };
-            for (i, c) in sum.iter_mut().enumerate() {
-                *c += count(i, tri, lo, hi);
-            }
+            count(tri, lo, hi, sum);
             if let Some(s) = n {
                 t.counted[s] += 1;
             }
