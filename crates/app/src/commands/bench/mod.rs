@@ -191,7 +191,7 @@ struct Measured {
 
 /// Build rounds per scene at least (`--repeat` when larger): builds are cheap next to the
 /// traces, and their ratios need more rounds than the traces' to settle.
-const BUILD_ROUNDS: usize = 5;
+const BUILD_ROUNDS: usize = 9;
 
 /// Measures every subject on one scene, on every ray set; the grids that walk packets also in
 /// `--tile` packets on the camera sets (a row of their own, family "grid packets").
