@@ -91,7 +91,7 @@ pub fn flat_grid_reusing(
     // slabs small enough that a slab's part of the cell table stays in cache while its
     // triangles, in any order, count and scatter into it (particles in random order made the
     // build super-linear in N).
-    let few = (rayon::current_num_threads() * 2).clamp(1, nz as usize);
+    let few = (rayon::current_num_threads() * 4).clamp(1, nz as usize);
     let layout = |slabs: usize| {
         let edge: Vec<u32> = (0..=slabs).map(|s| (s as u64 * nz as u64 / slabs as u64) as u32).collect();
         let mut slab_of_layer = vec![0u32; nz as usize];
