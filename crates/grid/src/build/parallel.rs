@@ -69,6 +69,9 @@ impl CellBox {
 struct SlabBins {
     items: Vec<(u32, CellBox)>,
     start: Vec<u32>,
+    /// Per slab, the cells of its triangles' ranges within it: its references under
+    /// bounding-box insertion.
+    box_cells: Vec<u64>,
 }
 
 /// Most cells in one slab: 128k cells, 512 KiB of the cell table.
@@ -164,13 +167,18 @@ pub fn flat_grid_reusing(
                 }
                 let mut next = start.clone();
                 let mut items = vec![(0u32, CellBox::default()); start[slabs] as usize];
+                let mut box_cells = vec![0u64; slabs];
                 for (j, b) in part.iter().enumerate() {
+                    let [lo, hi] = b.unpack();
+                    let row_cells = (hi.x - lo.x + 1) as u64 * (hi.y - lo.y + 1) as u64;
                     for s in slab_range(b) {
                         items[next[s] as usize] = ((k * CHUNK + j) as u32, *b);
                         next[s] += 1;
+                        let layers = hi.z.min(edge[s + 1] - 1) + 1 - lo.z.max(edge[s]);
+                        box_cells[s] += row_cells * layers as u64;
                     }
                 }
-                SlabBins { items, start }
+                SlabBins { items, start, box_cells }
             })
             .collect();
         (slabs, edge, bins)
@@ -181,38 +189,75 @@ pub fn flat_grid_reusing(
     let slab_base: Vec<usize> = edge.iter().map(|&z| z as usize * layer).collect();
     // Each slab counts its cells' references in a table of its own (in cache, reused between
     // builds) and keeps only which of its cells are occupied and their counts: no M-sized
-    // table, no pass over every cell but the slab's own.
-    let counted: Vec<SlabCounts> = times.record("count", || {
-        (0..slabs)
-            .into_par_iter()
-            .map(|s| {
-                let base = slab_base[s];
-                let layers = edge[s]..edge[s + 1];
-                with_slab_table(slab_base[s + 1] - base, true, |table| {
-                    for (i, b) in in_slab(s) {
-                        runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |r| {
-                            table[r.start - base..r.end - base].iter_mut().for_each(|n| *n += 1)
-                        });
-                    }
-                    SlabCounts::of(table)
+    // table, no pass over every cell but the slab's own. The scatter turns the table into each
+    // occupied cell's next free place in the slab's references (empty cells are never
+    // written) and writes them.
+    let count = |s: usize, table: &mut [u32]| {
+        let base = slab_base[s];
+        for (i, b) in in_slab(s) {
+            runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, edge[s]..edge[s + 1], |r| {
+                table[r.start - base..r.end - base].iter_mut().for_each(|n| *n += 1)
+            });
+        }
+        SlabCounts::of(table)
+    };
+    let scatter = |s: usize, counted: &SlabCounts, next: &mut [u32], out: &mut [u32]| {
+        let base = slab_base[s];
+        counted.starts_into(next);
+        for (i, b) in in_slab(s) {
+            runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, edge[s]..edge[s + 1], |r| {
+                for e in &mut next[r.start - base..r.end - base] {
+                    out[*e as usize] = i;
+                    *e += 1;
+                }
+            });
+        }
+    };
+    let slab_cells = |s: usize| slab_base[s + 1] - slab_base[s];
+    let prefix = |sizes: &mut dyn Iterator<Item = u64>| -> Vec<usize> {
+        let mut acc = 0;
+        std::iter::once(0).chain(sizes.map(|n| {
+            acc += n as usize;
+            acc
+        })).collect()
+    };
+    let mut refs = std::mem::take(&mut scratch.refs);
+    let (counted, ref_base) = if mode == InsertMode::BoundingBox {
+        // A slab's references are its ranges' cells, known from the binning: each slab counts
+        // and scatters at once, while its table and triangles are in cache.
+        let ref_base = prefix(&mut (0..slabs).map(|s| bins.iter().map(|b| b.box_cells[s]).sum()));
+        times.record("count and scatter", || super::refill_par(&mut refs, ref_base[slabs], "triangle references"))?;
+        let counted: Vec<SlabCounts> = times.record("count and scatter", || {
+            split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0]))
+                .into_par_iter()
+                .enumerate()
+                .map(|(s, out)| {
+                    with_slab_table(slab_cells(s), true, |table| {
+                        let counted = count(s, table);
+                        debug_assert_eq!(counted.refs, out.len() as u64, "slab {s}: its ranges' cells");
+                        scatter(s, &counted, table, out);
+                        counted
+                    })
                 })
-            })
-            .collect()
-    });
-    // Where each slab's references and occupied cells start.
-    let mut ref_base = Vec::with_capacity(slabs + 1);
-    let mut occupied_base = Vec::with_capacity(slabs + 1);
-    let (mut refs_total, mut occupied_total) = (0u64, 0usize);
-    for c in &counted {
-        ref_base.push(refs_total as usize);
-        occupied_base.push(occupied_total);
-        refs_total += c.refs;
-        occupied_total += c.counts.len();
-    }
-    check_refs(refs_total)?;
-    let total = refs_total as usize;
-    ref_base.push(total);
-    occupied_base.push(occupied_total);
+                .collect()
+        });
+        (counted, ref_base)
+    } else {
+        let counted: Vec<SlabCounts> = times.record("count", || {
+            (0..slabs).into_par_iter().map(|s| with_slab_table(slab_cells(s), true, |t| count(s, t))).collect()
+        });
+        let ref_base = prefix(&mut counted.iter().map(|c| c.refs));
+        check_refs(ref_base[slabs] as u64)?;
+        times.record("scatter", || super::refill_par(&mut refs, ref_base[slabs], "triangle references"))?;
+        times.record("scatter", || {
+            split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0])).into_par_iter().enumerate().for_each(
+                |(s, out)| with_slab_table(slab_cells(s), false, |next| scatter(s, &counted[s], next, out)),
+            )
+        });
+        (counted, ref_base)
+    };
+    let total = ref_base[slabs];
+    let occupied_total: usize = counted.iter().map(|c| c.counts.len()).sum();
     let mut occupied = std::mem::take(&mut scratch.occupied);
     let mut ref_start = std::mem::take(&mut scratch.ref_start);
     times.record("cell bits", || -> Result<(), BuildError> {
@@ -257,29 +302,6 @@ pub fn flat_grid_reusing(
             });
         Ok(())
     })?;
-    let mut refs = std::mem::take(&mut scratch.refs);
-    times.record("scatter", || super::refill_par(&mut refs, total, "triangle references"))?;
-    times.record("scatter", || {
-        split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0])).into_par_iter().enumerate().for_each(
-            |(s, out)| {
-                let base = slab_base[s];
-                let layers = edge[s]..edge[s + 1];
-                // Each occupied cell's next free place in the slab's references; empty cells
-                // are never written, so the table needs no clearing.
-                with_slab_table(slab_base[s + 1] - base, false, |next| {
-                    counted[s].starts_into(next);
-                    for (i, b) in in_slab(s) {
-                        runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, layers.clone(), |r| {
-                            for e in &mut next[r.start - base..r.end - base] {
-                                out[*e as usize] = i;
-                                *e += 1;
-                            }
-                        });
-                    }
-                })
-            },
-        );
-    });
     Ok(FlatGrid::from_parts(geom, occupied, ref_start, refs))
 }
 
