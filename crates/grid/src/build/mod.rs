@@ -85,7 +85,12 @@ pub fn refill_par<T: Copy + Default + Send + Sync>(
     v.clear();
     v.try_reserve_exact(n)
         .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
-    v.par_extend(rayon::iter::repeat_n(T::default(), n));
+    // Below 256 KiB the threads' hand-over costs more than the writes.
+    if n * size_of::<T>() < 1 << 18 {
+        v.resize(n, T::default());
+    } else {
+        v.par_extend(rayon::iter::repeat_n(T::default(), n));
+    }
     Ok(())
 }
 
