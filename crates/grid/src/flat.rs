@@ -231,7 +231,9 @@ impl FlatGrid {
         }
         #[cfg(feature = "parallel")]
         if opts.parallel {
-            return crate::build::parallel::flat_grid_reusing(tris, &geom, opts.insert, times, scratch);
+            return crate::build::on_pool(|| {
+                crate::build::parallel::flat_grid_reusing(tris, &geom, opts.insert, times, scratch)
+            });
         }
         let _ = scratch;
         let (cell_start, refs) = bucket::bucket(tris, None, &geom, opts.insert, INSERT_MARGIN_CELLS, Some(times))?;

@@ -301,6 +301,17 @@ fn build_with(
     cfg: &GridConfig,
     scratch: Option<&mut BuildScratch>,
 ) -> Result<(AnyGrid, BuildReport), BuildError> {
+    if cfg.build.parallel {
+        return crate::build::on_pool(|| build_on(tris, cfg, scratch));
+    }
+    build_on(tris, cfg, scratch)
+}
+
+fn build_on(
+    tris: &[[Vec3; 3]],
+    cfg: &GridConfig,
+    scratch: Option<&mut BuildScratch>,
+) -> Result<(AnyGrid, BuildReport), BuildError> {
     let mut times = PhaseTimes::default();
     let bounds = times.record("bounds", || triangle_bounds_with(tris, cfg.build.parallel));
     let choose = |times: &mut PhaseTimes, policy: Resolution| {

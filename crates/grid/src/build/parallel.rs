@@ -216,10 +216,12 @@ pub fn flat_grid_reusing(
     let slab_cells = |s: usize| slab_base[s + 1] - slab_base[s];
     let prefix = |sizes: &mut dyn Iterator<Item = u64>| -> Vec<usize> {
         let mut acc = 0;
-        std::iter::once(0).chain(sizes.map(|n| {
-            acc += n as usize;
-            acc
-        })).collect()
+        std::iter::once(0)
+            .chain(sizes.map(|n| {
+                acc += n as usize;
+                acc
+            }))
+            .collect()
     };
     let mut refs = std::mem::take(&mut scratch.refs);
     let (counted, ref_base) = if mode == InsertMode::BoundingBox {
@@ -250,9 +252,10 @@ pub fn flat_grid_reusing(
         check_refs(ref_base[slabs] as u64)?;
         times.record("scatter", || super::refill_par(&mut refs, ref_base[slabs], "triangle references"))?;
         times.record("scatter", || {
-            split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0])).into_par_iter().enumerate().for_each(
-                |(s, out)| with_slab_table(slab_cells(s), false, |next| scatter(s, &counted[s], next, out)),
-            )
+            split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0]))
+                .into_par_iter()
+                .enumerate()
+                .for_each(|(s, out)| with_slab_table(slab_cells(s), false, |next| scatter(s, &counted[s], next, out)))
         });
         (counted, ref_base)
     };
