@@ -63,7 +63,9 @@ fn pipeline_gen_info_build_rays_trace() {
     for key in ["resolution", "cells", "refs", "empty_percent", "memory_bytes", "build_ms", "cost_curve"] {
         assert!(!v[key].is_null(), "build --json lacks {key}: {build}");
     }
-    assert!(v["build_ms"]["count"].as_f64().is_some());
+    // Per phase: the parallel box-inserted build counts and scatters in one phase.
+    assert!(v["build_ms"]["bounds"].as_f64().is_some(), "{build}");
+    assert!(v["build_ms"]["count and scatter"].as_f64().is_some(), "{build}");
     let text = ok(&["build", s(&scene), "--resolution", "10,20,30", "--exact", "--serial"]);
     assert!(text.contains("10 x 20 x 30"), "{text}");
     for grid in ["macrocell", "multires", "twolevel", "proximity"] {
