@@ -241,22 +241,24 @@ pub fn flat_grid_reusing(
                         counted
                     })
                 })
-                .collect()
-        });
+                .collect::<Result<_, _>>()
+        })?;
         (counted, ref_base)
     } else {
         let counted: Vec<SlabCounts> = times.record("count", || {
-            (0..slabs).into_par_iter().map(|s| with_slab_table(slab_cells(s), true, |t| count(s, t))).collect()
-        });
+            (0..slabs)
+                .into_par_iter()
+                .map(|s| with_slab_table(slab_cells(s), true, |t| count(s, t)))
+                .collect::<Result<_, _>>()
+        })?;
         let ref_base = prefix(&mut counted.iter().map(|c| c.refs));
         check_refs(ref_base[slabs] as u64)?;
         times.record("scatter", || super::refill_par(&mut refs, ref_base[slabs], "triangle references"))?;
         times.record("scatter", || {
-            split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0]))
-                .into_par_iter()
-                .enumerate()
-                .for_each(|(s, out)| with_slab_table(slab_cells(s), false, |next| scatter(s, &counted[s], next, out)))
-        });
+            split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0])).into_par_iter().enumerate().try_for_each(
+                |(s, out)| with_slab_table(slab_cells(s), false, |next| scatter(s, &counted[s], next, out)),
+            )
+        })?;
         (counted, ref_base)
     };
     let total = ref_base[slabs];
@@ -373,12 +375,13 @@ thread_local! {
 
 /// Runs `f` on a table of `cells` entries of this thread's, zeroed when `zero` (else holding
 /// whatever the last user left).
-fn with_slab_table<R>(cells: usize, zero: bool, f: impl FnOnce(&mut [u32]) -> R) -> R {
+/// [`BuildError::OutOfMemory`] when a table of `cells` cannot be had (one slab spans the grid
+/// when long slivers cross it).
+fn with_slab_table<R>(cells: usize, zero: bool, f: impl FnOnce(&mut [u32]) -> R) -> Result<R, BuildError> {
     SLAB_TABLE.with(|t| {
         let mut t = t.borrow_mut();
         if t.len() < cells {
-            t.clear();
-            t.resize(cells, 0);
+            *t = super::zeroed(cells, "a slab's cell counts")?;
         } else if zero {
             t[..cells].fill(0);
         }
@@ -386,6 +389,6 @@ fn with_slab_table<R>(cells: usize, zero: bool, f: impl FnOnce(&mut [u32]) -> R)
         if t.len() > KEPT_TABLE_CELLS {
             *t = Vec::new();
         }
-        r
+        Ok(r)
     })
 }
