@@ -106,6 +106,22 @@ pub fn refill_par<T: Copy + Default + Send + Sync>(
     Ok(())
 }
 
+/// `v` of length `n` for a caller that overwrites every entry: a previous build's array is cut
+/// to length without being written (a rebuild every frame skips a pass over its references),
+/// else [`refill_par`].
+#[cfg(feature = "parallel")]
+pub fn resize_for_overwrite<T: Copy + Default + Send + Sync>(
+    v: &mut Vec<T>,
+    n: usize,
+    what: &'static str,
+) -> Result<(), BuildError> {
+    if v.len() >= n {
+        v.truncate(n);
+        return Ok(());
+    }
+    refill_par(v, n, what)
+}
+
 /// A vector of `n` default values, or [`BuildError::OutOfMemory`] when the allocator refuses
 /// (an address-space limit) instead of aborting the process.
 pub fn zeroed<T: Copy + Default>(n: usize, what: &'static str) -> Result<Vec<T>, BuildError> {

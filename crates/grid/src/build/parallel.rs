@@ -228,7 +228,9 @@ pub fn flat_grid_reusing(
         // A slab's references are its ranges' cells, known from the binning: each slab counts
         // and scatters at once, while its table and triangles are in cache.
         let ref_base = prefix(&mut (0..slabs).map(|s| bins.iter().map(|b| b.box_cells[s]).sum()));
-        times.record("count and scatter", || super::refill_par(&mut refs, ref_base[slabs], "triangle references"))?;
+        times.record("count and scatter", || {
+            super::resize_for_overwrite(&mut refs, ref_base[slabs], "triangle references")
+        })?;
         let counted: Vec<SlabCounts> = times.record("count and scatter", || {
             split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0]))
                 .into_par_iter()
@@ -253,7 +255,7 @@ pub fn flat_grid_reusing(
         })?;
         let ref_base = prefix(&mut counted.iter().map(|c| c.refs));
         check_refs(ref_base[slabs] as u64)?;
-        times.record("scatter", || super::refill_par(&mut refs, ref_base[slabs], "triangle references"))?;
+        times.record("scatter", || super::resize_for_overwrite(&mut refs, ref_base[slabs], "triangle references"))?;
         times.record("scatter", || {
             split_lengths(&mut refs, ref_base.windows(2).map(|w| w[1] - w[0])).into_par_iter().enumerate().try_for_each(
                 |(s, out)| with_slab_table(slab_cells(s), false, |next| scatter(s, &counted[s], next, out)),
