@@ -192,10 +192,27 @@ pub fn flat_grid_reusing(
     // table, no pass over every cell but the slab's own. The scatter turns the table into each
     // occupied cell's next free place in the slab's references (empty cells are never
     // written) and writes them.
+    let (rx, ry) = (geom.res.x as usize, geom.res.y as usize);
     let count = |s: usize, table: &mut [u32]| {
         let base = slab_base[s];
+        let last = table.len() - 1;
         for (i, b) in in_slab(s) {
-            runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, edge[s]..edge[s + 1], |r| {
+            let [lo, hi] = b.unpack();
+            let (z0, z1) = (lo.z.max(edge[s]), hi.z.min(edge[s + 1] - 1));
+            if mode == InsertMode::BoundingBox && hi.x - lo.x < 2 && hi.y - lo.y < 2 && z1 - z0 < 2 {
+                // A range of at most 2 × 2 × 2 cells (most triangles): its eight candidates
+                // each add whether they are in the range, with no loop whose trip count the
+                // branch predictor would have to guess. A candidate outside is clamped into the
+                // table and adds 0.
+                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
+                let (wx, wy, wz) = ((hi.x > lo.x) as u32, (hi.y > lo.y) as u32, (z1 > z0) as u32);
+                for (k, add) in [1, wx, wy, wx & wy, wz, wx & wz, wy & wz, wx & wy & wz].into_iter().enumerate() {
+                    let c = first + (k & 1) + rx * ((k >> 1) & 1) + layer * (k >> 2);
+                    table[c.min(last)] += add;
+                }
+                continue;
+            }
+            runs_of_triangle(&geom, &tris[i as usize], [lo, hi], mode, edge[s]..edge[s + 1], |r| {
                 table[r.start - base..r.end - base].iter_mut().for_each(|n| *n += 1)
             });
         }
@@ -205,7 +222,21 @@ pub fn flat_grid_reusing(
         let base = slab_base[s];
         counted.starts_into(next);
         for (i, b) in in_slab(s) {
-            runs_of_triangle(&geom, &tris[i as usize], b.unpack(), mode, edge[s]..edge[s + 1], |r| {
+            let [lo, hi] = b.unpack();
+            let (z0, z1) = (lo.z.max(edge[s]), hi.z.min(edge[s + 1] - 1));
+            if mode == InsertMode::BoundingBox && hi.x - lo.x < 2 && hi.y - lo.y < 2 && z1 - z0 < 2 {
+                // The cells of the range in one loop over its candidates (1, 2, 4 or 8): one
+                // trip count to guess, not three nested ones.
+                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
+                let wide = (hi.x > lo.x) as usize | ((hi.y > lo.y) as usize) << 1 | ((z1 > z0) as usize) << 2;
+                for &k in CANDIDATES[wide] {
+                    let e = &mut next[first + (k & 1) + rx * ((k >> 1) & 1) + layer * (k >> 2)];
+                    out[*e as usize] = i;
+                    *e += 1;
+                }
+                continue;
+            }
+            runs_of_triangle(&geom, &tris[i as usize], [lo, hi], mode, edge[s]..edge[s + 1], |r| {
                 for e in &mut next[r.start - base..r.end - base] {
                     out[*e as usize] = i;
                     *e += 1;
@@ -311,6 +342,13 @@ pub fn flat_grid_reusing(
     })?;
     Ok(FlatGrid::from_parts(geom, occupied, ref_start, refs))
 }
+
+/// For a cell range of at most 2 × 2 × 2 cells, by the axes on which it spans two cells (bit 0:
+/// x, 1: y, 2: z), its cells as offsets k (x + 2y + 4z) from its first, in increasing cell
+/// order. Ranges this small (most triangles' at the auto resolution) skip the row loops, whose
+/// short and varying trip counts the branch predictor missed (a tenth of a mesh's build).
+const CANDIDATES: [&[usize]; 8] =
+    [&[0], &[0, 1], &[0, 2], &[0, 1, 2, 3], &[0, 4], &[0, 1, 4, 5], &[0, 2, 4, 6], &[0, 1, 2, 3, 4, 5, 6, 7]];
 
 /// What the count of one slab keeps: which of its cells hold references (bit i of word i / 32:
 /// the slab's cell i) and how many, per occupied cell in order.
