@@ -29,6 +29,18 @@ pub struct OccupancyWord {
     pub rank: u32,
 }
 
+impl OccupancyWord {
+    /// Sets each word's rank from the bits of the words before it; returns the occupied cells.
+    pub(crate) fn rank_all(words: &mut [OccupancyWord]) -> u32 {
+        let mut rank = 0u32;
+        for w in words {
+            w.rank = rank;
+            rank += w.bits.count_ones();
+        }
+        rank
+    }
+}
+
 /// Cells per [`OccupancyWord`].
 pub const WORD_CELLS: usize = 32;
 
@@ -46,12 +58,6 @@ pub struct FlatGrid {
 }
 
 impl FlatGrid {
-    /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]` (the
-    /// builds' table of M + 1 offsets), stored compactly: the empty cells' offsets are dropped.
-    pub fn new(geom: GridGeometry, cell_start: Vec<u32>, refs: Vec<u32>) -> FlatGrid {
-        FlatGrid::compact(geom, &cell_start, refs)
-    }
-
     /// The grid of its arrays, as the parallel build writes them directly.
     #[cfg(feature = "parallel")]
     pub(crate) fn from_parts(
@@ -63,8 +69,9 @@ impl FlatGrid {
         FlatGrid { geom, occupied, ref_start, refs }
     }
 
-    /// [`FlatGrid::new`]'s occupancy words and offsets of a table of M + 1 offsets.
-    fn compact(geom: GridGeometry, cell_start: &[u32], refs: Vec<u32>) -> FlatGrid {
+    /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]` (the
+    /// builds' table of M + 1 offsets), stored compactly: the empty cells' offsets are dropped.
+    pub fn new(geom: GridGeometry, cell_start: Vec<u32>, refs: Vec<u32>) -> FlatGrid {
         let cells = cell_start.len().saturating_sub(1);
         // Word k holds cells 32k … 32k + 31: 33 offsets, compared pairwise.
         let bits = |k: usize| {
@@ -94,11 +101,7 @@ impl FlatGrid {
         }
         #[cfg(not(feature = "parallel"))]
         occupied.extend((0..words).map(|k| OccupancyWord { bits: bits(k), rank: 0 }));
-        let mut rank = 0u32;
-        for w in &mut occupied {
-            w.rank = rank;
-            rank += w.bits.count_ones();
-        }
+        let rank = OccupancyWord::rank_all(&mut occupied);
         let mut ref_start = vec![0; rank as usize + 1];
         ref_start[rank as usize] = refs.len() as u32;
         // Chunk c's occupied cells go to ref_start[rank of its first word ..].

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use super::{PhaseTimes, check_refs, split_lengths};
 use crate::BuildError;
-use crate::flat::{FlatGrid, WORD_CELLS};
+use crate::flat::{FlatGrid, OccupancyWord, WORD_CELLS};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES};
 use crate::insert::{InsertMode, box_cell_range, for_each_box_run_in_layers, for_each_run_in_layers, prepare};
 
@@ -319,11 +319,7 @@ pub fn flat_grid_reusing(
                 }
             }
         });
-        let mut rank = 0u32;
-        for w in &mut occupied {
-            w.rank = rank;
-            rank += w.bits.count_ones();
-        }
+        OccupancyWord::rank_all(&mut occupied);
         super::refill_par(&mut ref_start, occupied_total + 1, "the cell offsets")?;
         ref_start[occupied_total] = total as u32;
         split_lengths(&mut ref_start[..occupied_total], counted.iter().map(|c| c.counts.len()))
