@@ -23,9 +23,10 @@
 //! - memory-aware guess-and-check ([`CostModel::memory_aware`], the command line's and the
 //!   app's auto): T(m) + Tstep·w·(bytes of the grid per triangle), sampled from M = N up. The
 //!   survey's model ignores what a cell costs in memory; on the CPU the fastest flat grid has
-//!   5–8 cells per triangle while T(m) picks ~20 (a ½…2× sweep around it, 2026-12-02). w = 1.5
+//!   5–8 cells per triangle while T(m) picks ~20 (a ½…2× sweep around it, 2026-12-02). w = 2
 //!   cell steps per byte per triangle is the value that puts every swept optimum of the shared
-//!   scenes within T's reach on this machine (the README has the sweep).
+//!   scenes within T's reach on this machine (the README has the sweeps; 1.5 until the
+//!   traversal's per-cell costs dropped, 2026-12-04).
 
 use glam::Vec3;
 use gridrt_scene::Aabb;
@@ -85,7 +86,7 @@ impl CostModel {
     /// survey's in m, so 12 samples space m as finely as 24 do there (each sample is a counting
     /// pass, the largest part of a mid-size build).
     pub fn memory_aware() -> CostModel {
-        CostModel { memory_weight: 1.5, samples: 12, cache_bytes: MEMORY_AWARE_CACHE_BYTES, ..CostModel::default() }
+        CostModel { memory_weight: 2.0, samples: 12, cache_bytes: MEMORY_AWARE_CACHE_BYTES, ..CostModel::default() }
     }
 
     /// T(m) for a grid with `cells` cells and `n_m` triangle–cell references over `triangles`

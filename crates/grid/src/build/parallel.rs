@@ -212,6 +212,13 @@ pub fn flat_grid_reusing(
                 }
                 continue;
             }
+            if mode == InsertMode::BoundingBox {
+                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
+                for_each_box_cell(first, [hi.x - lo.x + 1, hi.y - lo.y + 1, z1 + 1 - z0], [1, rx, layer], |c| {
+                    table[c] += 1
+                });
+                continue;
+            }
             runs_of_triangle(&geom, &tris[i as usize], [lo, hi], mode, edge[s]..edge[s + 1], |r| {
                 table[r.start - base..r.end - base].iter_mut().for_each(|n| *n += 1)
             });
@@ -234,6 +241,15 @@ pub fn flat_grid_reusing(
                     out[*e as usize] = i;
                     *e += 1;
                 }
+                continue;
+            }
+            if mode == InsertMode::BoundingBox {
+                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
+                for_each_box_cell(first, [hi.x - lo.x + 1, hi.y - lo.y + 1, z1 + 1 - z0], [1, rx, layer], |c| {
+                    let e = &mut next[c];
+                    out[*e as usize] = i;
+                    *e += 1;
+                });
                 continue;
             }
             runs_of_triangle(&geom, &tris[i as usize], [lo, hi], mode, edge[s]..edge[s + 1], |r| {
@@ -337,6 +353,32 @@ pub fn flat_grid_reusing(
         Ok(())
     })?;
     Ok(FlatGrid::from_parts(geom, occupied, ref_start, refs))
+}
+
+/// `f` for each cell of a box of `extent` cells from cell `first`, a step along axis a adding
+/// `stride[a]`, the innermost loop along the box's longest axis (a long thin range has one
+/// long loop, not many of one or two trips). The cells come in no particular order: one
+/// triangle's cells each get it once, so a cell's references stay in triangle order.
+#[inline(always)]
+fn for_each_box_cell(first: usize, extent: [u32; 3], stride: [usize; 3], mut f: impl FnMut(usize)) {
+    let inner = if extent[0] >= extent[1] && extent[0] >= extent[2] {
+        0
+    } else if extent[1] >= extent[2] {
+        1
+    } else {
+        2
+    };
+    let (a, b) = ((inner + 1) % 3, (inner + 2) % 3);
+    let (n, step) = (extent[inner] as usize, stride[inner]);
+    for p in 0..extent[b] as usize {
+        for q in 0..extent[a] as usize {
+            let mut c = first + p * stride[b] + q * stride[a];
+            for _ in 0..n {
+                f(c);
+                c += step;
+            }
+        }
+    }
 }
 
 /// For a cell range of at most 2 × 2 × 2 cells, by the axes on which it spans two cells (bit 0:

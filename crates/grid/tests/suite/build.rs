@@ -266,6 +266,7 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     // The memory term: sampled from one cell per triangle up, each sample's cost is T(m) plus
     // the grid's bytes per triangle weighted, and the choice is coarser than the survey's.
     let aware = CostModel::memory_aware();
+    assert_eq!(aware.memory_weight, 2.0, "the weight calibrated on this machine (README)");
     let choice = resolution::choose(&tris, &b, Resolution::Auto, &aware, InsertMode::BoundingBox, true);
     let lo = (tris.len() as f64).cbrt();
     assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
@@ -273,14 +274,14 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         // The term scaled by the share of the grid's bytes the cache does not hold.
         let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
         let missed = bytes / (bytes + 1024.0 * 1024.0);
-        let expected = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 1.5 * missed * bytes / tris.len() as f64;
+        let expected = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 2.0 * missed * bytes / tris.len() as f64;
         assert!((s.cost - expected).abs() < 1e-9, "{s:?}");
     }
     // Without the cache (the term as first calibrated) the weight applies whole.
     let uncached = CostModel { cache_bytes: 0.0, ..aware };
     let s = &choice.curve[0];
     let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
-    let whole = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 1.5 * bytes / tris.len() as f64;
+    let whole = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 2.0 * bytes / tris.len() as f64;
     assert!((uncached.cost(s.cells, s.n_m, tris.len()) - whole).abs() < 1e-9);
     // A tiny scene's grid fits in the cache: the memory-aware choice is no coarser than the
     // survey's there (the Cornell box's 36 triangles went to 3³ cells without the cache).
