@@ -104,26 +104,10 @@ pub fn flat_grid_reusing(
         (edge, slab_of_layer)
     };
     // Each triangle's cell range, prepared once (count and scatter read it); a slab visits the
-    // triangles whose z layers meet it, in increasing order. The ranges' cells bound the
-    // references from above (exactly, for box insertion): a grid far over the limit is refused
-    // before its cells are visited one by one (a fine grid over long slivers would otherwise
-    // take minutes to fail).
-    let (boxes, upper): (Vec<CellBox>, u64) = times.record("bin", || {
-        let boxes: Vec<CellBox> =
-            tris.par_iter().map(|t| CellBox::pack(box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32))).collect();
-        let upper = boxes
-            .par_iter()
-            .map(|b| {
-                let [lo, hi] = b.unpack();
-                let e = hi - lo + UVec3::ONE;
-                e.x as u64 * e.y as u64 * e.z as u64
-            })
-            .sum();
-        (boxes, upper)
+    // triangles whose z layers meet it, in increasing order.
+    let boxes: Vec<CellBox> = times.record("bin", || {
+        tris.par_iter().map(|t| CellBox::pack(box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32))).collect()
     });
-    if mode == InsertMode::BoundingBox {
-        check_refs(upper)?;
-    }
     // A triangle is copied into every slab it meets: with triangles spanning many thin slabs
     // (long slivers across the scene) the copies could outgrow the grid, so the copies are held
     // to four per triangle on average: thin slabs when they allow it, else as many as the
@@ -184,6 +168,12 @@ pub fn flat_grid_reusing(
         (slabs, edge, bins)
     });
     drop(boxes);
+    // The ranges' cells, summed by the binning, are the references of box insertion: a grid far
+    // over the limit is refused before its cells are visited one by one (a fine grid over long
+    // slivers would otherwise take minutes to fail).
+    if mode == InsertMode::BoundingBox {
+        check_refs(bins.iter().flat_map(|b| &b.box_cells).sum())?;
+    }
     let in_slab =
         |s: usize| bins.iter().flat_map(move |b| b.items[b.start[s] as usize..b.start[s + 1] as usize].iter().copied());
     let slab_base: Vec<usize> = edge.iter().map(|&z| z as usize * layer).collect();
