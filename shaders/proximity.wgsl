@@ -1,5 +1,5 @@
 // Closest hit through a flat grid with proximity clouds: from an empty cell at chessboard
-// distance k >= 2 from any triangle, jump out of the empty cube around it.
+// distance k >= MIN_JUMP_DISTANCE from any triangle, jump out of the empty cube around it.
 // CPU port: crates/grid/src/proximity.rs (`ProximityGrid::trace`).
 //!include shared/closest_hit.wgsl
 //!include shared/flat_grid.wgsl
@@ -18,8 +18,12 @@ fn exit_of_box(g: GridRay, lo: vec3<i32>, hi: vec3<i32>) -> f32 {
     return t;
 }
 
-// The flat grid's walk, restarted beyond the empty cube around a cell at distance k >= 2 (called
-// by `trace` in shared/closest_hit.wgsl).
+// Smallest distance at which the walk jumps out of the empty cube around its cell (a restart costs
+// several steps). Rust: proximity::MIN_JUMP_DISTANCE.
+const MIN_JUMP_DISTANCE: i32 = 4;
+
+// The flat grid's walk, restarted beyond the empty cube around a cell at distance
+// k >= MIN_JUMP_DISTANCE (called by `trace` in shared/closest_hit.wgsl).
 fn walk(g_in: GridRay) {
     var g = g_in;
     let resi = vec3<i32>(params.res);
@@ -32,7 +36,7 @@ fn walk(g_in: GridRay) {
         let c = w.out_cell;
         let idx = cell_index(c, params.res);
         let k = i32((distance[idx / 4u] >> (8u * (idx % 4u))) & 0xffu);
-        if k >= 2 {
+        if k >= MIN_JUMP_DISTANCE {
             let lo = max(c - vec3<i32>(k - 1), vec3<i32>(0));
             let hi = min(c + vec3<i32>(k), resi);
             let t = min(exit_of_box(g, lo, hi), g.t1);

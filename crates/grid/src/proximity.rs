@@ -40,7 +40,8 @@ impl ProximityGrid {
         self.grid.memory_bytes() + self.distance.len().div_ceil(4) as u64 * 4
     }
 
-    /// Closest hit; empty cells with distance ≥ 2 are skipped in one jump (counted as one cell).
+    /// Closest hit; empty cells with distance ≥ [`MIN_JUMP_DISTANCE`] are skipped in one jump
+    /// (counted as one cell).
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
         let traversal = opts.traversal;
         closest_hit(tris, ray, opts, |search| {
@@ -52,7 +53,7 @@ impl ProximityGrid {
                 walk(traversal, &gr, res, |cell, idx, t_exit| {
                     search.visit_cell();
                     let k = self.distance[idx] as u32;
-                    if k >= 2 {
+                    if k >= MIN_JUMP_DISTANCE {
                         // Leave the empty cube around this cell.
                         let lo = cell.saturating_sub(UVec3::splat(k - 1));
                         let hi = (cell + UVec3::splat(k)).min(res);
@@ -79,6 +80,12 @@ impl ProximityGrid {
         })
     }
 }
+
+/// Smallest distance at which a ray jumps out of the empty cube around its cell rather than
+/// stepping on: a jump restarts the walk (its set-up costs several steps), so a cube only a few
+/// cells across is crossed faster cell by cell. WGSL: `MIN_JUMP_DISTANCE` in
+/// shaders/proximity.wgsl.
+pub const MIN_JUMP_DISTANCE: u32 = 4;
 
 /// Where the ray leaves the box of cells `[lo, hi)` (grid space): the nearest far-side plane.
 fn exit_of_box(r: &GridRay, lo: UVec3, hi: UVec3) -> f32 {

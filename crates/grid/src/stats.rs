@@ -64,7 +64,7 @@ pub struct StructureStats {
     /// Macrocell edge, when the structure has macrocells.
     pub macro_size: Option<u32>,
     pub occupied_macrocells: Option<u64>,
-    /// Cells whose proximity distance lets a ray jump (distance ≥ 2).
+    /// Cells whose proximity distance lets a ray jump (distance ≥ `proximity::MIN_JUMP_DISTANCE`).
     pub jump_cells: Option<u64>,
     pub hierarchy: Option<HierarchyStats>,
 }

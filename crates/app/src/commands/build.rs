@@ -88,7 +88,10 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
         println!("macrocells:   {a}^3 fine cells each, {} occupied", s.occupied_macrocells.unwrap_or(0));
     }
     if let Some(j) = s.jump_cells {
-        println!("proximity:    {j} empty cells allow a jump (distance >= 2)");
+        println!(
+            "proximity:    {j} empty cells allow a jump (distance >= {})",
+            gridrt_grid::proximity::MIN_JUMP_DISTANCE
+        );
     }
     println!("cells:        {}", s.cells);
     println!("refs:         {} ({:.2} per triangle)", s.refs, s.refs as f64 / tris.len() as f64);
