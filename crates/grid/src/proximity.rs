@@ -40,6 +40,11 @@ impl ProximityGrid {
         self.grid.memory_bytes() + self.distance.len().div_ceil(4) as u64 * 4
     }
 
+    /// The empty cells a ray jumps out of (distance ≥ [`MIN_JUMP_DISTANCE`]).
+    pub fn jump_cells(&self) -> u64 {
+        self.distance.iter().filter(|&&d| d as u32 >= MIN_JUMP_DISTANCE).count() as u64
+    }
+
     /// Closest hit; empty cells with distance ≥ [`MIN_JUMP_DISTANCE`] are skipped in one jump
     /// (counted as one cell).
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {

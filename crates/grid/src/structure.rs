@@ -270,9 +270,7 @@ impl AnyGrid {
             AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => h.stats(triangles),
             AnyGrid::Proximity(p) => {
                 let mut s = p.grid.stats(triangles);
-                s.jump_cells = Some(
-                    p.distance.iter().filter(|&&d| d as u32 >= crate::proximity::MIN_JUMP_DISTANCE).count() as u64,
-                );
+                s.jump_cells = Some(p.jump_cells());
                 s
             }
         };

@@ -15,28 +15,19 @@ use super::{PhaseTimes, check_refs, split_lengths};
 use crate::BuildError;
 use crate::flat::{FlatGrid, OccupancyWord, WORD_CELLS};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS, MAX_AXIS_RES};
-use crate::insert::{InsertMode, box_cell_range, for_each_box_run_in_layers, for_each_run_in_layers, prepare};
+use crate::insert::{InsertMode, box_cell_range, for_each_run_in_layers, prepare};
 
-/// The runs of cells triangle `tri` (prepared cell range `cells`) goes into within `layers`:
-/// the range's rows for bounding-box insertion, else the exact test's.
+/// The runs of cells triangle `tri` goes into within `layers` under exact insertion (box
+/// insertion's cells come from the range alone, see [`for_each_box_cell`]).
 #[inline(always)]
-fn runs_of_triangle(
+fn exact_runs(
     geom: &GridGeometry,
     tri: &[Vec3; 3],
-    cells: [UVec3; 2],
-    mode: InsertMode,
     layers: std::ops::Range<u32>,
     f: impl FnMut(std::ops::Range<usize>),
 ) {
-    match mode {
-        InsertMode::BoundingBox => {
-            for_each_box_run_in_layers(geom, cells, layers, f);
-        }
-        InsertMode::Exact => {
-            let g = prepare(geom, tri, INSERT_MARGIN_CELLS);
-            for_each_run_in_layers(geom, &g, mode, layers, f);
-        }
-    }
+    let g = prepare(geom, tri, INSERT_MARGIN_CELLS);
+    for_each_run_in_layers(geom, &g, InsertMode::Exact, layers, f);
 }
 
 /// A triangle's cell range, each corner's three indices in 10 bits of a word (every axis has at
@@ -177,77 +168,78 @@ pub fn flat_grid_reusing(
     let in_slab =
         |s: usize| bins.iter().flat_map(move |b| b.items[b.start[s] as usize..b.start[s + 1] as usize].iter().copied());
     let slab_base: Vec<usize> = edge.iter().map(|&z| z as usize * layer).collect();
+    // A box range's part in slab `s`: its first cell, relative to the slab's, and its extent.
+    let (rx, ry) = (geom.res.x as usize, geom.res.y as usize);
+    let stride = [1, rx, layer];
+    let slab_part = |s: usize| {
+        let (base, z_first, z_last) = (slab_base[s], edge[s], edge[s + 1] - 1);
+        #[inline(always)]
+        move |b: CellBox| -> (usize, [u32; 3]) {
+            let [lo, hi] = b.unpack();
+            let (z0, z1) = (lo.z.max(z_first), hi.z.min(z_last));
+            let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
+            (first, [hi.x - lo.x + 1, hi.y - lo.y + 1, z1 + 1 - z0])
+        }
+    };
+    // Ranges of at most 2 × 2 × 2 cells (most triangles' at the auto resolution) skip the
+    // loops, whose short and varying trip counts the branch predictor missed.
+    let small = |e: [u32; 3]| e[0] <= 2 && e[1] <= 2 && e[2] <= 2;
+    // Such a range's candidate k (x + 2y + 4z) from its first cell.
+    let candidate = |first: usize, k: usize| first + (k & 1) + rx * ((k >> 1) & 1) + layer * (k >> 2);
     // Each slab counts its cells' references in a table of its own (in cache, reused between
     // builds) and keeps only which of its cells are occupied and their counts: no M-sized
     // table, no pass over every cell but the slab's own. The scatter turns the table into each
     // occupied cell's next free place in the slab's references (empty cells are never
     // written) and writes them.
-    let (rx, ry) = (geom.res.x as usize, geom.res.y as usize);
     let count = |s: usize, table: &mut [u32]| {
-        let base = slab_base[s];
         let last = table.len() - 1;
+        let slab_box = slab_part(s);
         for (i, b) in in_slab(s) {
-            let [lo, hi] = b.unpack();
-            let (z0, z1) = (lo.z.max(edge[s]), hi.z.min(edge[s + 1] - 1));
-            if mode == InsertMode::BoundingBox && hi.x - lo.x < 2 && hi.y - lo.y < 2 && z1 - z0 < 2 {
-                // A range of at most 2 × 2 × 2 cells (most triangles): its eight candidates
-                // each add whether they are in the range, with no loop whose trip count the
-                // branch predictor would have to guess. A candidate outside is clamped into the
-                // table and adds 0.
-                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
-                let (wx, wy, wz) = ((hi.x > lo.x) as u32, (hi.y > lo.y) as u32, (z1 > z0) as u32);
-                for (k, add) in [1, wx, wy, wx & wy, wz, wx & wz, wy & wz, wx & wy & wz].into_iter().enumerate() {
-                    let c = first + (k & 1) + rx * ((k >> 1) & 1) + layer * (k >> 2);
-                    table[c.min(last)] += add;
-                }
-                continue;
-            }
-            if mode == InsertMode::BoundingBox {
-                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
-                for_each_box_cell(first, [hi.x - lo.x + 1, hi.y - lo.y + 1, z1 + 1 - z0], [1, rx, layer], |c| {
-                    table[c] += 1
+            if mode == InsertMode::Exact {
+                let base = slab_base[s];
+                exact_runs(&geom, &tris[i as usize], edge[s]..edge[s + 1], |r| {
+                    table[r.start - base..r.end - base].iter_mut().for_each(|n| *n += 1)
                 });
                 continue;
             }
-            runs_of_triangle(&geom, &tris[i as usize], [lo, hi], mode, edge[s]..edge[s + 1], |r| {
-                table[r.start - base..r.end - base].iter_mut().for_each(|n| *n += 1)
-            });
+            let (first, e) = slab_box(b);
+            if small(e) {
+                // Each of the eight candidates adds whether it is in the range, with no loop;
+                // a candidate outside is clamped into the table and adds 0.
+                let (wx, wy, wz) = ((e[0] == 2) as u32, (e[1] == 2) as u32, (e[2] == 2) as u32);
+                for (k, add) in [1, wx, wy, wx & wy, wz, wx & wz, wy & wz, wx & wy & wz].into_iter().enumerate() {
+                    table[candidate(first, k).min(last)] += add;
+                }
+            } else {
+                for_each_box_cell(first, e, stride, |c| table[c] += 1);
+            }
         }
         SlabCounts::of(table)
     };
     let scatter = |s: usize, counted: &SlabCounts, next: &mut [u32], out: &mut [u32]| {
-        let base = slab_base[s];
         counted.starts_into(next);
+        let slab_box = slab_part(s);
+        let mut put = |c: usize, i: u32| {
+            let e = &mut next[c];
+            out[*e as usize] = i;
+            *e += 1;
+        };
         for (i, b) in in_slab(s) {
-            let [lo, hi] = b.unpack();
-            let (z0, z1) = (lo.z.max(edge[s]), hi.z.min(edge[s + 1] - 1));
-            if mode == InsertMode::BoundingBox && hi.x - lo.x < 2 && hi.y - lo.y < 2 && z1 - z0 < 2 {
-                // The cells of the range in one loop over its candidates (1, 2, 4 or 8): one
-                // trip count to guess, not three nested ones.
-                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
-                let wide = (hi.x > lo.x) as usize | ((hi.y > lo.y) as usize) << 1 | ((z1 > z0) as usize) << 2;
+            if mode == InsertMode::Exact {
+                let base = slab_base[s];
+                exact_runs(&geom, &tris[i as usize], edge[s]..edge[s + 1], |r| r.for_each(|c| put(c - base, i)));
+                continue;
+            }
+            let (first, e) = slab_box(b);
+            if small(e) {
+                // One loop over the range's 1, 2, 4 or 8 cells: one trip count to guess.
+                let wide = (e[0] == 2) as usize | ((e[1] == 2) as usize) << 1 | ((e[2] == 2) as usize) << 2;
                 for &k in CANDIDATES[wide] {
-                    let e = &mut next[first + (k & 1) + rx * ((k >> 1) & 1) + layer * (k >> 2)];
-                    out[*e as usize] = i;
-                    *e += 1;
+                    put(candidate(first, k), i);
                 }
-                continue;
+            } else {
+                for_each_box_cell(first, e, stride, |c| put(c, i));
             }
-            if mode == InsertMode::BoundingBox {
-                let first = lo.x as usize + rx * (lo.y as usize + ry * z0 as usize) - base;
-                for_each_box_cell(first, [hi.x - lo.x + 1, hi.y - lo.y + 1, z1 + 1 - z0], [1, rx, layer], |c| {
-                    let e = &mut next[c];
-                    out[*e as usize] = i;
-                    *e += 1;
-                });
-                continue;
-            }
-            runs_of_triangle(&geom, &tris[i as usize], [lo, hi], mode, edge[s]..edge[s + 1], |r| {
-                for e in &mut next[r.start - base..r.end - base] {
-                    out[*e as usize] = i;
-                    *e += 1;
-                }
-            });
         }
     };
     let slab_cells = |s: usize| slab_base[s + 1] - slab_base[s];
@@ -373,8 +365,7 @@ fn for_each_box_cell(first: usize, extent: [u32; 3], stride: [usize; 3], mut f: 
 
 /// For a cell range of at most 2 × 2 × 2 cells, by the axes on which it spans two cells (bit 0:
 /// x, 1: y, 2: z), its cells as offsets k (x + 2y + 4z) from its first, in increasing cell
-/// order. Ranges this small (most triangles' at the auto resolution) skip the row loops, whose
-/// short and varying trip counts the branch predictor missed (a tenth of a mesh's build).
+/// order.
 const CANDIDATES: [&[usize]; 8] =
     [&[0], &[0, 1], &[0, 2], &[0, 1, 2, 3], &[0, 4], &[0, 1, 4, 5], &[0, 2, 4, 6], &[0, 1, 2, 3, 4, 5, 6, 7]];
 
