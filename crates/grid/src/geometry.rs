@@ -9,7 +9,7 @@
 //! whose `t` a traversal attributes to the "wrong" side of a boundary is still found in a cell
 //! already visited. The grid box is padded too, so no triangle touches its faces.
 
-use glam::{UVec3, Vec3};
+use glam::{UVec3, Vec3, Vec3A};
 use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
@@ -85,6 +85,7 @@ impl GridGeometry {
 
     /// The ray in grid space clipped to the grid box and to `[tmin, tmax]`, or `None` when the
     /// segment misses the grid.
+    #[inline]
     pub fn clip(&self, r: &PreparedRay) -> Option<GridRay> {
         GridRay::clipped((r.org - self.min) * self.inv_cell, r.dir * self.inv_cell, self.res, r.tmin, r.tmax)
     }
@@ -105,38 +106,43 @@ impl GridRay {
     /// The ray `o + t·d` (already in grid space) clipped to the box `[0, res]` and to
     /// `[tmin, tmax]`; `None` when nothing is left. Shared by every level of every structure,
     /// so that all of them treat parallel components and empty ranges alike.
-    pub fn clipped(o: Vec3, mut d: Vec3, res: UVec3, tmin: f32, tmax: f32) -> Option<GridRay> {
-        // A component so small that its reciprocal overflows is treated as exactly parallel,
-        // by the clip and by every walker (they test `d[a] == 0`).
-        let mut inv_d = Vec3::ONE / d;
-        for a in 0..3 {
-            if !inv_d[a].is_finite() {
-                (d[a], inv_d[a]) = (0.0, f32::INFINITY);
+    #[inline]
+    pub fn clipped(o: Vec3, d: Vec3, res: UVec3, tmin: f32, tmax: f32) -> Option<GridRay> {
+        // On SIMD lanes (one division for the three reciprocals); each lane's operations and
+        // the order of the comparisons are the scalar rule's.
+        let (o4, mut d4) = (Vec3A::from(o), Vec3A::from(d));
+        let mut inv4 = Vec3A::ONE / d4;
+        let parallel = !inv4.is_finite_mask();
+        let res = Vec3A::from(res.as_vec3());
+        if parallel.any() {
+            d4 = Vec3A::select(parallel, Vec3A::ZERO, d4);
+            inv4 = Vec3A::select(parallel, Vec3A::INFINITY, inv4);
+            let inside = o4.cmpge(Vec3A::ZERO) & o4.cmple(res);
+            if (parallel & !inside).any() {
+                return None;
             }
         }
-        let res = res.as_vec3();
+        let ta = (Vec3A::ZERO - o4) * inv4;
+        let tb = (res - o4) * inv4;
+        let ordered = ta.cmple(tb);
+        let (lo, hi) = (Vec3A::select(ordered, ta, tb), Vec3A::select(ordered, tb, ta));
         let mut t0 = tmin;
         let mut t1 = tmax;
         for a in 0..3 {
-            if d[a] == 0.0 {
-                if !(o[a] >= 0.0 && o[a] <= res[a]) {
-                    return None;
-                }
+            if parallel.test(a) {
                 continue;
             }
-            let ta = (0.0 - o[a]) * inv_d[a];
-            let tb = (res[a] - o[a]) * inv_d[a];
-            let (lo, hi) = if ta <= tb { (ta, tb) } else { (tb, ta) };
-            if lo > t0 {
-                t0 = lo;
+            if lo[a] > t0 {
+                t0 = lo[a];
             }
-            if hi < t1 {
-                t1 = hi;
+            if hi[a] < t1 {
+                t1 = hi[a];
             }
         }
         if !t0.is_finite() || !t1.is_finite() || t0 > t1 {
             return None;
         }
+        let (d, inv_d) = (Vec3::from(d4), Vec3::from(inv4));
         Some(GridRay { o, d, inv_d, t0, t1 })
     }
 

@@ -217,19 +217,16 @@ impl SliceWalk {
         // The reference plane: the first ray's origin or its end, whichever the rays are
         // closer together at.
         active.extend((0..lanes.len() as u32).filter(|&i| lanes[i as usize].ray.is_some()));
-        let candidates = [ends.0, ends.1].map(|p| p.map(|p: [f64; 3]| p[axis]));
-        let bounds = candidates.map(|s| s.map(|s| (s, Bounds::of(axis, s, lanes, active))));
+        // (A common origin, as a camera tile's, has no spread: the end is then not looked at.)
         let spread = |b: &Bounds| (b.c_hi[0] - b.c_lo[0]) + (b.c_hi[1] - b.c_lo[1]);
-        (walk.s_ref, walk.bounds) = match bounds {
-            [Some(a), Some(b)] => {
-                if spread(&b.1) < spread(&a.1) {
-                    b
-                } else {
-                    a
-                }
-            }
-            [Some(a), None] | [None, Some(a)] => a,
-            [None, None] => (0.0, Bounds::of(axis, 0.0, lanes, active)),
+        let at = |p: Option<[f64; 3]>| p.map(|p| (p[axis], Bounds::of(axis, p[axis], lanes, active)));
+        (walk.s_ref, walk.bounds) = match at(ends.0) {
+            Some(a) if spread(&a.1) == 0.0 => a,
+            Some(a) => match at(ends.1) {
+                Some(b) if spread(&b.1) < spread(&a.1) => b,
+                _ => a,
+            },
+            None => at(ends.1).unwrap_or_else(|| (0.0, Bounds::of(axis, 0.0, lanes, active))),
         };
         Some(walk)
     }
