@@ -25,7 +25,7 @@ pub struct PreparedRay {
 impl PreparedRay {
     /// Returns `None` for rays no triangle can be hit by: zero or non-finite direction,
     /// non-finite origin, NaN bounds or an empty `[tmin, tmax]`.
-    #[inline]
+    #[inline(always)]
     pub fn new(ray: &Ray) -> Option<PreparedRay> {
         let org = ray.o();
         let dir = ray.d();
