@@ -84,29 +84,39 @@ struct Bounds {
 }
 
 impl Bounds {
-    /// The bounds over the `active` lanes of their lines on the two axes other than `a`, with
-    /// intercepts at plane `s_ref`.
-    fn of(a: usize, s_ref: f64, lanes: &[Lane], active: &[u32]) -> Bounds {
+    const EMPTY: Bounds = Bounds {
+        c_lo: [f64::INFINITY; 2],
+        c_hi: [f64::NEG_INFINITY; 2],
+        slope_lo: [f64::INFINITY; 2],
+        slope_hi: [f64::NEG_INFINITY; 2],
+    };
+
+    /// The bounds over the `active` lanes started by step `j` of their lines on the two axes
+    /// other than `a`, with intercepts at plane `s_ref`.
+    fn of(a: usize, s_ref: f64, lanes: &[Lane], active: &[u32], j: u32) -> Bounds {
         let others = [(a + 1) % 3, (a + 2) % 3];
-        let mut b = Bounds {
-            c_lo: [f64::INFINITY; 2],
-            c_hi: [f64::NEG_INFINITY; 2],
-            slope_lo: [f64::INFINITY; 2],
-            slope_hi: [f64::NEG_INFINITY; 2],
-        };
+        let mut b = Bounds::EMPTY;
         for &i in active {
             let l = &lanes[i as usize];
-            let ds = s_ref - l.o[a];
-            for (k, &u) in others.iter().enumerate() {
-                let slope = l.slope[k];
-                let c = l.o[u] + slope * ds;
-                b.c_lo[k] = b.c_lo[k].min(c);
-                b.c_hi[k] = b.c_hi[k].max(c);
-                b.slope_lo[k] = b.slope_lo[k].min(slope);
-                b.slope_hi[k] = b.slope_hi[k].max(slope);
+            if l.first <= j {
+                b.add(others, a, s_ref, l);
             }
         }
         b
+    }
+
+    /// The bounds widened to lane `l`'s line.
+    #[inline]
+    fn add(&mut self, others: [usize; 2], a: usize, s_ref: f64, l: &Lane) {
+        let ds = s_ref - l.o[a];
+        for (k, &u) in others.iter().enumerate() {
+            let slope = l.slope[k];
+            let c = l.o[u] + slope * ds;
+            self.c_lo[k] = self.c_lo[k].min(c);
+            self.c_hi[k] = self.c_hi[k].max(c);
+            self.slope_lo[k] = self.slope_lo[k].min(slope);
+            self.slope_hi[k] = self.slope_hi[k].max(slope);
+        }
     }
 }
 
@@ -219,14 +229,14 @@ impl SliceWalk {
         active.extend((0..lanes.len() as u32).filter(|&i| lanes[i as usize].ray.is_some()));
         // (A common origin, as a camera tile's, has no spread: the end is then not looked at.)
         let spread = |b: &Bounds| (b.c_hi[0] - b.c_lo[0]) + (b.c_hi[1] - b.c_lo[1]);
-        let at = |p: Option<[f64; 3]>| p.map(|p| (p[axis], Bounds::of(axis, p[axis], lanes, active)));
+        let at = |p: Option<[f64; 3]>| p.map(|p| (p[axis], Bounds::of(axis, p[axis], lanes, active, u32::MAX)));
         (walk.s_ref, walk.bounds) = match at(ends.0) {
             Some(a) if spread(&a.1) == 0.0 => a,
             Some(a) => match at(ends.1) {
                 Some(b) if spread(&b.1) < spread(&a.1) => b,
                 _ => a,
             },
-            None => at(ends.1).unwrap_or_else(|| (0.0, Bounds::of(axis, 0.0, lanes, active))),
+            None => at(ends.1).unwrap_or_else(|| (0.0, Bounds::of(axis, 0.0, lanes, active, u32::MAX))),
         };
         Some(walk)
     }
@@ -258,9 +268,21 @@ impl SliceWalk {
         true
     }
 
-    /// Recomputes the frustum's bounds over the `active` lanes.
-    pub fn update(&mut self, lanes: &[Lane], active: &[u32]) {
-        self.bounds = Bounds::of(self.axis, self.s_ref, lanes, active);
+    /// Recomputes the frustum's bounds over the `active` lanes that have started by step `j`.
+    pub fn update(&mut self, lanes: &[Lane], active: &[u32], j: u32) {
+        self.bounds = Bounds::of(self.axis, self.s_ref, lanes, active, j);
+    }
+
+    /// Empties the frustum: no lane has started.
+    pub fn clear(&mut self) {
+        self.bounds = Bounds::EMPTY;
+    }
+
+    /// Widens the frustum to a lane that starts.
+    #[inline]
+    pub fn start(&mut self, lane: &Lane) {
+        let a = self.axis;
+        self.bounds.add([(a + 1) % 3, (a + 2) % 3], a, self.s_ref, lane);
     }
 
     /// The walk's steps (empty when no ray is valid).
