@@ -27,6 +27,11 @@
 //!   cell steps per byte per triangle is the value that puts every swept optimum of the shared
 //!   scenes within T's reach on this machine (the README has the sweeps; 1.5 until the
 //!   traversal's per-cell costs dropped, 2026-12-04).
+//! - exact insertion takes the resolution the auto policy picks for bounding-box insertion.
+//!   With exact N_m the memory term shrinks and T(m) picks grids one sample finer on most
+//!   scenes, which measured no faster (the engine's and the teapot's 7–15% slower) and up to
+//!   1.4× larger; and counting exact N_m costs more than the build itself (the overlap test per
+//!   candidate cell). The README's levers table has the measurements.
 
 use glam::Vec3;
 use gridrt_scene::Aabb;
@@ -222,13 +227,14 @@ pub fn count_refs(tris: &[[Vec3; 3]], bounds: &Aabb, res: [u32; 3], mode: Insert
     tris.iter().map(one).sum()
 }
 
-/// Chooses the resolution for `tris` within `bounds`.
+/// Chooses the resolution for `tris` within `bounds`, for either insertion mode: the auto
+/// policy samples T(m) with bounding-box insertion's N_m whatever the grid's insertion (see
+/// the module doc).
 pub fn choose(
     tris: &[[Vec3; 3]],
     bounds: &Aabb,
     policy: Resolution,
     model: &CostModel,
-    mode: InsertMode,
     parallel: bool,
 ) -> ResolutionChoice {
     let n = tris.len().max(1) as f64;
@@ -241,7 +247,7 @@ pub fn choose(
         Resolution::Point => cubic_cells(bounds, (2.0 * n * r).min(cap)),
         Resolution::Line => cubic_cells(bounds, (n * r).powf(1.5).min(cap)),
         Resolution::Auto => {
-            let curve = sample_curve(tris, bounds, model, mode, parallel);
+            let curve = sample_curve(tris, bounds, model, InsertMode::BoundingBox, parallel);
             let best = best_sample(&curve).expect("at least one sample");
             return ResolutionChoice { resolution: best.resolution, policy, curve };
         }

@@ -315,9 +315,7 @@ fn build_on(
     let mut times = PhaseTimes::default();
     let bounds = times.record("bounds", || triangle_bounds_with(tris, cfg.build.parallel));
     let choose = |times: &mut PhaseTimes, policy: Resolution| {
-        times.record("resolution", || {
-            resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.insert, cfg.build.parallel)
-        })
+        times.record("resolution", || resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.parallel))
     };
     // Every resolution, explicit or chosen, obeys the same cell limit as the auto choice.
     let choose = |times: &mut PhaseTimes, policy: Resolution| -> Result<ResolutionChoice, BuildError> {

@@ -200,7 +200,7 @@ fn resolution_policies_follow_their_formulas() {
     let b = triangle_bounds(&tris);
     let m = CostModel::default();
     let cells = |p| {
-        let r = resolution::choose(&tris, &b, p, &m, InsertMode::BoundingBox, false).resolution;
+        let r = resolution::choose(&tris, &b, p, &m, false).resolution;
         r.iter().map(|&x| x as f64).product::<f64>()
     };
     let n = tris.len() as f64;
@@ -209,17 +209,8 @@ fn resolution_policies_follow_their_formulas() {
     assert!(near(cells(Resolution::Point), 2.0 * n * 5.0)); // eq. (1): 2N·Tinter/Tstep
     let line = (n * 5.0).powf(1.5).min(m.cell_cap(tris.len()) as f64);
     assert!(near(cells(Resolution::Line), line)); // eq. (2), capped by memory
-    assert_eq!(
-        resolution::choose(&tris, &b, Resolution::Explicit([3, 4, 5]), &m, InsertMode::BoundingBox, false).resolution,
-        [3, 4, 5]
-    );
-    assert_eq!(
-        resolution::choose(&tris, &b, Resolution::Cubic(40), &m, InsertMode::BoundingBox, false)
-            .resolution
-            .iter()
-            .max(),
-        Some(&40)
-    );
+    assert_eq!(resolution::choose(&tris, &b, Resolution::Explicit([3, 4, 5]), &m, false).resolution, [3, 4, 5]);
+    assert_eq!(resolution::choose(&tris, &b, Resolution::Cubic(40), &m, false).resolution.iter().max(), Some(&40));
     for s in ["auto", "point", "line", "density=3.5", "m=64", "10,20,30"] {
         assert!(s.parse::<Resolution>().is_ok(), "{s}");
     }
@@ -234,14 +225,17 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     assert!(tris.len() <= resolution::EXACT_COUNT_LIMIT, "{} triangles are sampled", tris.len());
     let b = triangle_bounds(&tris);
     let model = CostModel::default();
+    // The auto policy samples box insertion's N_m for either insertion mode.
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, true);
+    let best = choice.curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap();
+    assert_eq!(best.resolution, choice.resolution);
+    assert_eq!(choice.curve, resolution::sample_curve(&tris, &b, &model, InsertMode::BoundingBox, true));
     for insert in InsertMode::ALL {
-        let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, insert, true);
-        assert!(choice.curve.len() >= 5, "{:?}", choice.curve);
-        assert!(choice.curve.windows(2).all(|w| w[0].m < w[1].m));
-        let best = choice.curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap();
-        assert_eq!(best.resolution, choice.resolution);
+        let curve = resolution::sample_curve(&tris, &b, &model, insert, true);
+        assert!(curve.len() >= 5, "{curve:?}");
+        assert!(curve.windows(2).all(|w| w[0].m < w[1].m));
         // N_m from counting equals the reference count of the built grid, for some samples.
-        for s in choice.curve.iter().step_by(4) {
+        for s in curve.iter().step_by(4) {
             let grid = FlatGrid::build(
                 &tris,
                 GridGeometry::new(&b, s.resolution),
@@ -254,12 +248,10 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         }
         // The interval is the survey's: from (10N)^⅓ up.
         let lo = (10.0 * tris.len() as f64).cbrt();
-        assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
+        assert!((curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", curve[0].m);
     }
     // Different constants move the optimum: expensive steps give coarser grids.
-    let with_step = |t_step| {
-        resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step, ..model }, InsertMode::BoundingBox, true)
-    };
+    let with_step = |t_step| resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step, ..model }, true);
     let (cheap, dear) = (with_step(0.02), with_step(1.0));
     let m = |c: &gridrt_grid::ResolutionChoice| c.resolution.iter().map(|&x| x as f64).product::<f64>();
     assert!(m(&cheap) > m(&dear), "{:?} vs {:?}", cheap.resolution, dear.resolution);
@@ -267,7 +259,7 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     // the grid's bytes per triangle weighted, and the choice is coarser than the survey's.
     let aware = CostModel::memory_aware();
     assert_eq!(aware.memory_weight, 2.0, "the weight calibrated on this machine (README)");
-    let choice = resolution::choose(&tris, &b, Resolution::Auto, &aware, InsertMode::BoundingBox, true);
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &aware, true);
     let lo = (tris.len() as f64).cbrt();
     assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
     for s in &choice.curve {
@@ -287,14 +279,14 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     // survey's there (the Cornell box's 36 triangles went to 3³ cells without the cache).
     let tiny: Vec<[Vec3; 3]> = tris.iter().step_by((tris.len() / 36).max(1)).take(36).copied().collect();
     let tb = gridrt_grid::triangle_bounds(&tiny);
-    let pick = |m: &CostModel| resolution::choose(&tiny, &tb, Resolution::Auto, m, InsertMode::BoundingBox, true);
+    let pick = |m: &CostModel| resolution::choose(&tiny, &tb, Resolution::Auto, m, true);
     assert!(
         m(&pick(&aware)) > m(&pick(&uncached)),
         "{:?} vs {:?}",
         pick(&aware).resolution,
         pick(&uncached).resolution
     );
-    let survey = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
+    let survey = resolution::choose(&tris, &b, Resolution::Auto, &model, true);
     assert!(m(&choice) < m(&survey), "{:?} vs {:?}", choice.resolution, survey.resolution);
 }
 
@@ -341,7 +333,7 @@ fn auto_resolution_never_exceeds_the_reference_limit() {
     let tris = tris_of(SceneKind::Slivers, 20_000);
     let b = triangle_bounds(&tris);
     let model = CostModel { max_cells_per_triangle: 1e4, max_cells: 1 << 27, ..CostModel::default() };
-    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, true);
     let limit = gridrt_grid::build::MAX_REFS;
     assert!(choice.curve.iter().any(|s| s.n_m > limit), "the test needs unbuildable samples: {:?}", choice.curve);
     let chosen = choice.curve.iter().find(|s| s.resolution == choice.resolution).unwrap();
