@@ -238,7 +238,8 @@ pub struct GridArgs {
     /// point, line, m=N, or mx,my,mz. Default: auto (multires: density=0.0625; twolevel: λ₁·N cells).
     #[arg(long, value_parser = parse_resolution)]
     pub resolution: Option<Resolution>,
-    /// Insert triangles by exact triangle/box overlap instead of by bounding box.
+    /// Insert triangles by exact triangle/box overlap instead of by bounding box (the auto
+    /// resolution is the one bounding-box insertion would get).
     #[arg(long)]
     pub exact: bool,
     /// Build on one thread (the result is identical to the parallel build).
