@@ -101,7 +101,11 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     let phases: Vec<String> = b.times.0.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();
     println!("build ms:     {:.2} total ({})", b.times.total(), phases.join(", "));
     if let Some(choice) = b.resolution_choice.as_ref().filter(|c| !c.curve.is_empty()) {
-        println!("cost model T(m) = Tsetup + m*Tstep + (N_m/m^2)*Tinter, sampled:");
+        // The auto policy samples bounding-box insertion's N_m for either insertion mode.
+        println!(
+            "cost model T(m) = Tsetup + m*Tstep + (N_m/m^2)*Tinter (+ the memory term when its weight is set), \
+             N_m of bounding-box insertion, sampled:"
+        );
         println!("  {:>8} {:>16} {:>12} {:>10} {:>10}", "m", "resolution", "N_m", "mu", "T(m)");
         for c in &choice.curve {
             let mark = if c.resolution == choice.resolution { "  <- chosen" } else { "" };
