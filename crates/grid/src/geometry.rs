@@ -109,7 +109,9 @@ impl GridRay {
     #[inline]
     pub fn clipped(o: Vec3, d: Vec3, res: UVec3, tmin: f32, tmax: f32) -> Option<GridRay> {
         // On SIMD lanes (one division for the three reciprocals); each lane's operations and
-        // the order of the comparisons are the scalar rule's.
+        // the order of the comparisons are the scalar rule's. A component so small that its
+        // reciprocal overflows is treated as exactly parallel, by the clip and by every walker
+        // (they test `d[a] == 0`).
         let (o4, mut d4) = (Vec3A::from(o), Vec3A::from(d));
         let mut inv4 = Vec3A::ONE / d4;
         let parallel = !inv4.is_finite_mask();

@@ -159,6 +159,8 @@ pub struct SliceWalk {
     /// one axis after another).
     single_ray_cells: f64,
     bounds: Bounds,
+    /// The first step at which a lane not yet in `bounds` starts (see [`SliceWalk::reach`]).
+    next_start: u32,
 }
 
 impl SliceWalk {
@@ -222,7 +224,8 @@ impl SliceWalk {
             last,
             s_ref: 0.0,
             single_ray_cells,
-            bounds: Bounds { c_lo: [0.0; 2], c_hi: [0.0; 2], slope_lo: [0.0; 2], slope_hi: [0.0; 2] },
+            bounds: Bounds::EMPTY,
+            next_start: first,
         };
         // The reference plane: the first ray's origin or its end, whichever the rays are
         // closer together at.
@@ -273,16 +276,32 @@ impl SliceWalk {
         self.bounds = Bounds::of(self.axis, self.s_ref, lanes, active, j);
     }
 
-    /// Empties the frustum: no lane has started.
-    pub fn clear(&mut self) {
+    /// Starts the walk with an empty frustum: the lanes join it as the walk reaches them
+    /// ([`SliceWalk::reach`]). Before its first slice a lane's line is of no use and would widen
+    /// the rectangles (shadow rays start at different depths).
+    pub fn begin(&mut self) {
         self.bounds = Bounds::EMPTY;
+        self.next_start = self.first;
     }
 
-    /// Widens the frustum to a lane that starts.
+    /// Widens the frustum to the `active` lanes whose first step is `j` or earlier and not yet
+    /// in it (a lane ends only after it started, so the lanes not started are all active).
     #[inline]
-    pub fn start(&mut self, lane: &Lane) {
+    pub fn reach(&mut self, j: u32, lanes: &[Lane], active: &[u32]) {
+        if j < self.next_start {
+            return;
+        }
         let a = self.axis;
-        self.bounds.add([(a + 1) % 3, (a + 2) % 3], a, self.s_ref, lane);
+        let mut later = u32::MAX;
+        for &i in active {
+            let lane = &lanes[i as usize];
+            if lane.first > j {
+                later = later.min(lane.first);
+            } else if lane.first >= self.next_start {
+                self.bounds.add([(a + 1) % 3, (a + 2) % 3], a, self.s_ref, lane);
+            }
+        }
+        self.next_start = later;
     }
 
     /// The walk's steps (empty when no ray is valid).

@@ -205,27 +205,12 @@ impl Packet {
             };
         };
         let mut next_check = 0u32;
-        // The frustum bounds the lanes the walk has reached only: before its first slice a
-        // lane's line is of no use and would widen the rectangles (shadow rays start at
-        // different depths). Every active lane is still tested against every triangle, so the
-        // packet's mailbox stays valid for lanes that start later.
-        walk.clear();
-        // The lanes that start at step `next_start` or later are not in the frustum yet (a lane
-        // ends only after it started: those are all active).
-        let mut next_start = *walk.steps().start();
+        // The frustum bounds the lanes the walk has reached only. Every active lane is still
+        // tested against every triangle, so the packet's mailbox stays valid for lanes that
+        // start later.
+        walk.begin();
         for j in walk.steps() {
-            if j >= next_start {
-                let mut later = u32::MAX;
-                for &i in &self.active {
-                    let lane = &lanes[i as usize];
-                    if lane.first > j {
-                        later = later.min(lane.first);
-                    } else if lane.first >= next_start {
-                        walk.start(lane);
-                    }
-                }
-                next_start = later;
-            }
+            walk.reach(j, lanes, &self.active);
             // cells_before[j]: the running total before step j.
             while self.cells_before.len() < j as usize {
                 self.cells_before.push(cells);
