@@ -264,6 +264,13 @@ pub struct GridArgs {
     /// term (default 1024; 0: the whole term at every size).
     #[arg(long, value_parser = parse_memory_weight)]
     pub cache_kib: Option<f64>,
+    /// Grid size in MiB beyond which the auto resolution counts every further byte as read from
+    /// DRAM (default 16) …
+    #[arg(long, value_parser = parse_memory_weight)]
+    pub dram_mib: Option<f64>,
+    /// … at this many more cell steps per byte per triangle (default 8; 0: no DRAM tier).
+    #[arg(long, value_parser = parse_memory_weight)]
+    pub dram_weight: Option<f64>,
     /// Number of resolutions sampled by guess-and-check.
     #[arg(long, default_value_t = CostModel::memory_aware().samples)]
     pub samples: u32,

@@ -27,6 +27,11 @@
 //!   cell steps per byte per triangle is the value that puts every swept optimum of the shared
 //!   scenes within T's reach on this machine (the README has the sweeps; 1.5 until the
 //!   traversal's per-cell costs dropped, 2026-12-04).
+//! - the DRAM tier ([`CostModel::dram_bytes`], 16 MiB, weight 8 in the memory-aware model): a
+//!   grid that outgrows the caches pays main memory's latency on the walk's misses. On the
+//!   shared scenes (auto grids of at most 15 MB) it changes nothing; on the 1M-triangle crowd,
+//!   the 2.1M mountain and the 2.4M particles the sweep's fastest grid lay at 0.6–0.85× the m
+//!   chosen without it, which it picks, with builds faster by as much (2026-12-04).
 //! - exact insertion takes the resolution the auto policy picks for bounding-box insertion.
 //!   With exact N_m the memory term shrinks and T(m) picks grids one sample finer on most
 //!   scenes, which measured no faster (the engine's and the teapot's 7–15% slower) and up to
@@ -44,6 +49,14 @@ use wide::{f32x4, i32x4};
 /// [`CostModel::memory_aware`]'s cache: grids of a few KiB (tens of triangles) pay almost no
 /// memory term, grids of megabytes nearly all of it. Read the README's tables for the value.
 pub const MEMORY_AWARE_CACHE_BYTES: f64 = (1024 * 1024) as f64;
+
+/// [`CostModel::memory_aware`]'s DRAM tier: the bytes of grid beyond which a walk's misses go to
+/// main memory, and their weight (cell steps per byte per triangle, on top of the memory
+/// weight). Every shared scene's auto grid is below it; the 1M-triangle crowd, the 2.1M
+/// mountain and the 2.4M particles (58–166 MB) are above, and their swept optima lie at
+/// 0.6–0.85× the m chosen without it. Read the README's tables for the values.
+pub const MEMORY_AWARE_DRAM_BYTES: f64 = (16 * 1024 * 1024) as f64;
+pub const MEMORY_AWARE_DRAM_WEIGHT: f64 = 8.0;
 
 /// The constants of T = Tsetup + m·Tstep + μ·Tinter, plus the guess-and-check settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -67,6 +80,12 @@ pub struct CostModel {
     /// larger the whole term (0: the whole term at every size).
     #[serde(default)]
     pub cache_bytes: f64,
+    /// Bytes of grid beyond which the walk's misses go to DRAM: every byte beyond them costs
+    /// `dram_weight` cell steps per triangle more (0 weight: no such tier).
+    #[serde(default)]
+    pub dram_bytes: f64,
+    #[serde(default)]
+    pub dram_weight: f64,
 }
 
 impl Default for CostModel {
@@ -81,6 +100,8 @@ impl Default for CostModel {
             max_cells: 1 << 26,
             memory_weight: 0.0,
             cache_bytes: 0.0,
+            dram_bytes: 0.0,
+            dram_weight: 0.0,
         }
     }
 }
@@ -91,7 +112,14 @@ impl CostModel {
     /// survey's in m, so 12 samples space m as finely as 24 do there (each sample is a counting
     /// pass, the largest part of a mid-size build).
     pub fn memory_aware() -> CostModel {
-        CostModel { memory_weight: 2.0, samples: 12, cache_bytes: MEMORY_AWARE_CACHE_BYTES, ..CostModel::default() }
+        CostModel {
+            memory_weight: 2.0,
+            samples: 12,
+            cache_bytes: MEMORY_AWARE_CACHE_BYTES,
+            dram_bytes: MEMORY_AWARE_DRAM_BYTES,
+            dram_weight: MEMORY_AWARE_DRAM_WEIGHT,
+            ..CostModel::default()
+        }
     }
 
     /// T(m) for a grid with `cells` cells and `n_m` triangle–cell references over `triangles`
@@ -99,14 +127,17 @@ impl CostModel {
     /// grid's bytes when every cell had an offset. The flat grid now stores offsets for its
     /// occupied cells only (a quarter of a byte per empty cell), but the term stays as it was
     /// calibrated: it stands for the walk's cache misses per cell, which the sweep measures.
+    /// The bytes beyond [`CostModel::dram_bytes`] weigh `dram_weight` more.
     pub fn cost(&self, cells: u64, n_m: u64, triangles: usize) -> f64 {
         let m = (cells as f64).cbrt();
         let bytes = 4.125 * cells as f64 + 4.0 * n_m as f64;
         let missed = bytes / (bytes + self.cache_bytes);
+        let beyond = (bytes - self.dram_bytes).max(0.0);
+        let per_tri = triangles.max(1) as f64;
         self.t_setup
             + m * self.t_step
             + (n_m as f64 / (m * m)) * self.t_inter
-            + self.t_step * self.memory_weight * missed * bytes / triangles.max(1) as f64
+            + self.t_step * (self.memory_weight * missed * bytes + self.dram_weight * beyond) / per_tri
     }
 
     /// The memory cap on cells for `n` triangles.

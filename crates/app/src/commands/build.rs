@@ -103,7 +103,7 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
     if let Some(choice) = b.resolution_choice.as_ref().filter(|c| !c.curve.is_empty()) {
         // The auto policy samples bounding-box insertion's N_m for either insertion mode.
         println!(
-            "cost model T(m) = Tsetup + m*Tstep + (N_m/m^2)*Tinter (+ the memory term when its weight is set), \
+            "cost model T(m) = Tsetup + m*Tstep + (N_m/m^2)*Tinter (+ the memory term and its DRAM tier when their weights are set), \
              N_m of bounding-box insertion, sampled:"
         );
         println!("  {:>8} {:>16} {:>12} {:>10} {:>10}", "m", "resolution", "N_m", "mu", "T(m)");

@@ -27,6 +27,8 @@ impl GridArgs {
             max_cells: self.max_cells,
             memory_weight: self.memory_weight.unwrap_or(d.memory_weight),
             cache_bytes: self.cache_kib.map_or(d.cache_bytes, |k| k * 1024.0),
+            dram_bytes: self.dram_mib.map_or(d.dram_bytes, |k| k * 1024.0 * 1024.0),
+            dram_weight: self.dram_weight.unwrap_or(d.dram_weight),
             ..d
         };
         #[cfg(not(target_arch = "wasm32"))]

@@ -275,6 +275,19 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
     let whole = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 2.0 * bytes / tris.len() as f64;
     assert!((uncached.cost(s.cells, s.n_m, tris.len()) - whole).abs() < 1e-9);
+    // The DRAM tier: the default's 16 MiB are far beyond this small grid (no term); with the
+    // tier at a fraction of the grids' bytes, every byte beyond it weighs 8 cell steps more per
+    // triangle, and the choice gets coarser.
+    assert_eq!((aware.dram_bytes, aware.dram_weight), (16.0 * 1024.0 * 1024.0, 8.0), "the README's values");
+    let dram = CostModel { dram_bytes: 16.0 * 1024.0, ..aware };
+    for s in &choice.curve {
+        let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
+        let beyond = (bytes - 16.0 * 1024.0).max(0.0);
+        let expected = aware.cost(s.cells, s.n_m, tris.len()) + 0.1 * 8.0 * beyond / tris.len() as f64;
+        assert!((dram.cost(s.cells, s.n_m, tris.len()) - expected).abs() < 1e-9, "{s:?}");
+    }
+    let coarser = resolution::choose(&tris, &b, Resolution::Auto, &dram, true);
+    assert!(m(&coarser) < m(&choice), "{:?} vs {:?}", coarser.resolution, choice.resolution);
     // A tiny scene's grid fits in the cache: the memory-aware choice is no coarser than the
     // survey's there (the Cornell box's 36 triangles went to 3³ cells without the cache).
     let tiny: Vec<[Vec3; 3]> = tris.iter().step_by((tris.len() / 36).max(1)).take(36).copied().collect();
