@@ -68,6 +68,10 @@ struct SlabBins {
 /// Most cells in one slab: 128k cells, 512 KiB of the cell table.
 const SLAB_CELLS: usize = 1 << 17;
 
+/// Triangles binned together: their cell ranges (128 KiB) stay in cache between the chunk's
+/// counting and placing passes.
+const BIN_CHUNK: usize = 1 << 14;
+
 /// The flat grid of [`super::bucket::bucket`] over all of `tris` on all threads, bit-identical
 /// to the serial build's, written into `scratch`'s arrays (taken out of it; their memory reused).
 pub fn flat_grid_reusing(
@@ -94,71 +98,99 @@ pub fn flat_grid_reusing(
         }
         (edge, slab_of_layer)
     };
-    // Each triangle's cell range, prepared once (count and scatter read it); a slab visits the
-    // triangles whose z layers meet it, in increasing order.
-    let boxes: Vec<CellBox> = times.record("bin", || {
-        tris.par_iter().map(|t| CellBox::pack(box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32))).collect()
-    });
     // A triangle is copied into every slab it meets: with triangles spanning many thin slabs
     // (long slivers across the scene) the copies could outgrow the grid, so the copies are held
-    // to four per triangle on average: thin slabs when they allow it, else as many as the
-    // threads share, else one.
+    // to a few per triangle: thin slabs when they allow it, else as many as the threads share,
+    // else one.
     let many = few.max(cells.div_ceil(SLAB_CELLS)).min(nz as usize);
-    let (slabs, edge, bins) = times.record("bin", || {
-        let (slabs, (edge, slab_of_layer)) = [many, few, 1]
-            .into_iter()
-            .map(|n| (n, layout(n)))
-            .find(|(_, (_, of))| {
-                let pairs: u64 = boxes
-                    .par_iter()
-                    .map(|b| {
-                        let (z0, z1) = b.z_range();
-                        (of[z1 as usize] - of[z0 as usize]) as u64 + 1
-                    })
-                    .sum();
-                pairs <= 4 * tris.len() as u64
-            })
-            .expect("one slab holds each triangle once");
-        // The triangles of each slab with their cell ranges (copied, so that a slab reads them
-        // in sequence), in increasing order: each chunk of triangles sorts its own by slab (a
-        // counting sort), and a slab reads its run of every chunk, chunks in order.
-        const CHUNK: usize = 1 << 14;
+    // The triangles of each slab with their cell ranges (copied, so that a slab reads them in
+    // sequence), in increasing order: each chunk of triangles sorts its own by slab (a counting
+    // sort), and a slab reads its run of every chunk, chunks in order. Any layout gives the same
+    // grid; it only decides how the work is cut.
+    let bin_chunk = |k: usize, part: &[CellBox], slabs: usize, edge: &[u32], slab_of_layer: &[u32]| {
         let slab_range = |b: &CellBox| {
             let (z0, z1) = b.z_range();
             slab_of_layer[z0 as usize] as usize..=slab_of_layer[z1 as usize] as usize
         };
-        let bins: Vec<SlabBins> = boxes
-            .par_chunks(CHUNK)
+        let mut start = vec![0u32; slabs + 1];
+        for b in part {
+            for s in slab_range(b) {
+                start[s + 1] += 1;
+            }
+        }
+        for s in 0..slabs {
+            start[s + 1] += start[s];
+        }
+        let mut next = start.clone();
+        let mut items = vec![(0u32, CellBox::default()); start[slabs] as usize];
+        let mut box_cells = vec![0u64; slabs];
+        for (j, b) in part.iter().enumerate() {
+            let [lo, hi] = b.unpack();
+            let row_cells = (hi.x - lo.x + 1) as u64 * (hi.y - lo.y + 1) as u64;
+            for s in slab_range(b) {
+                items[next[s] as usize] = ((k * BIN_CHUNK + j) as u32, *b);
+                next[s] += 1;
+                let layers = hi.z.min(edge[s + 1] - 1) + 1 - lo.z.max(edge[s]);
+                box_cells[s] += row_cells * layers as u64;
+            }
+        }
+        SlabBins { items, start, box_cells }
+    };
+    let range_of = |t: &[Vec3; 3]| CellBox::pack(box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32));
+    // First in one pass over the triangles: each chunk prepares its triangles' cell ranges in a
+    // buffer of its thread's (in cache) and bins them into thin slabs, unless they would be
+    // copied more than four times on average there (then the ranges are prepared again, kept
+    // whole and a layout chosen over all of them, below). One read of the triangles, no array of
+    // ranges through memory.
+    let thin = times.record("bin", || {
+        let (edge, slab_of_layer) = layout(many);
+        let bins: Option<Vec<SlabBins>> = tris
+            .par_chunks(BIN_CHUNK)
             .enumerate()
             .map(|(k, part)| {
-                let mut start = vec![0u32; slabs + 1];
-                for b in part {
-                    for s in slab_range(b) {
-                        start[s + 1] += 1;
-                    }
-                }
-                for s in 0..slabs {
-                    start[s + 1] += start[s];
-                }
-                let mut next = start.clone();
-                let mut items = vec![(0u32, CellBox::default()); start[slabs] as usize];
-                let mut box_cells = vec![0u64; slabs];
-                for (j, b) in part.iter().enumerate() {
-                    let [lo, hi] = b.unpack();
-                    let row_cells = (hi.x - lo.x + 1) as u64 * (hi.y - lo.y + 1) as u64;
-                    for s in slab_range(b) {
-                        items[next[s] as usize] = ((k * CHUNK + j) as u32, *b);
-                        next[s] += 1;
-                        let layers = hi.z.min(edge[s + 1] - 1) + 1 - lo.z.max(edge[s]);
-                        box_cells[s] += row_cells * layers as u64;
-                    }
-                }
-                SlabBins { items, start, box_cells }
+                CHUNK_BOXES.with(|boxes| {
+                    let mut boxes = boxes.borrow_mut();
+                    boxes.clear();
+                    boxes.extend(part.iter().map(range_of));
+                    let pairs: usize = boxes
+                        .iter()
+                        .map(|b| {
+                            let (z0, z1) = b.z_range();
+                            (slab_of_layer[z1 as usize] - slab_of_layer[z0 as usize]) as usize + 1
+                        })
+                        .sum();
+                    (pairs <= 4 * part.len()).then(|| bin_chunk(k, &boxes, many, &edge, &slab_of_layer))
+                })
             })
             .collect();
-        (slabs, edge, bins)
+        bins.map(|b| (many, edge, b))
     });
-    drop(boxes);
+    let (slabs, edge, bins) = match thin {
+        Some(t) => t,
+        None => times.record("bin", || {
+            let boxes: Vec<CellBox> = tris.par_iter().map(range_of).collect();
+            let (slabs, (edge, slab_of_layer)) = [many, few, 1]
+                .into_iter()
+                .map(|n| (n, layout(n)))
+                .find(|(_, (_, of))| {
+                    let pairs: u64 = boxes
+                        .par_iter()
+                        .map(|b| {
+                            let (z0, z1) = b.z_range();
+                            (of[z1 as usize] - of[z0 as usize]) as u64 + 1
+                        })
+                        .sum();
+                    pairs <= 4 * tris.len() as u64
+                })
+                .expect("one slab holds each triangle once");
+            let bins: Vec<SlabBins> = boxes
+                .par_chunks(BIN_CHUNK)
+                .enumerate()
+                .map(|(k, part)| bin_chunk(k, part, slabs, &edge, &slab_of_layer))
+                .collect();
+            (slabs, edge, bins)
+        }),
+    };
     // The ranges' cells, summed by the binning, are the references of box insertion: a grid far
     // over the limit is refused before its cells are visited one by one (a fine grid over long
     // slivers would otherwise take minutes to fail).
@@ -429,6 +461,8 @@ impl SlabCounts {
 const KEPT_TABLE_CELLS: usize = 1 << 18;
 
 thread_local! {
+    /// A chunk's cell ranges while it is binned ([`BIN_CHUNK`] of them).
+    static CHUNK_BOXES: std::cell::RefCell<Vec<CellBox>> = const { std::cell::RefCell::new(Vec::new()) };
     static SLAB_TABLE: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
