@@ -575,7 +575,8 @@ pub struct BenchArgs {
     /// and proximity grids get a packet row each; --dynamic's packet rows use it too).
     #[arg(long, default_value_t = gridrt_grid::coherent::DEFAULT_TILE, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub tile: u32,
-    /// Frames per animated scene (evenly over its first clip) with --dynamic.
+    /// Frames per animated scene (evenly over its first clip) with --dynamic, after one warm-up
+    /// frame that is not counted.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub frames: u32,
 }

@@ -4,7 +4,9 @@
 //! BVH strategy is rebuilt (obvhs BVH2 `fastest_build`, obvhs CWBVH, `bvh`'s `build_par`) or
 //! refit (obvhs BVH2, built once with `medium_build`), and all trace the same 512×512 primary
 //! rays and the same shadow rays (from the flat grid's primary hits; occlusion queries, each
-//! structure stopping at its first hit). Build and trace time per frame are reported apart;
+//! structure stopping at its first hit). A warm-up frame counted for no one comes first (the
+//! refit trees' setup, every first build into fresh memory), then the steady state is timed.
+//! Build and trace time per frame are reported apart;
 //! primary hits are compared with the flat grid's as in `gridrt bench`, shadow rays on whether
 //! they are occluded.
 
@@ -34,7 +36,7 @@ pub struct DynamicRow {
     pub structure: String,
     /// "grid" or "peer".
     pub family: &'static str,
-    /// "rebuild" every frame, or "refit" a tree built once (its first build is `setup_ms`).
+    /// "rebuild" every frame, or "refit" a tree built once (its build is `setup_ms`).
     pub strategy: &'static str,
     pub frames: usize,
     pub pose_ms: f64,
@@ -154,7 +156,7 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<()> {
     let strategies = Strategy::all(!args.no_peers);
     let frames = args.frames.max(1) as usize;
     let packets = PacketOptions { tile: args.tile, mailbox: true };
-    let pb = progress((files.len() * frames) as u64, "dynamic");
+    let pb = progress((files.len() * (frames + 1)) as u64, "dynamic");
     let mut rows = Vec::new();
     for f in &files {
         rows.extend(bench_scene(f, &strategies, (frames, packets), cost, &pb)?);
@@ -259,17 +261,20 @@ fn bench_scene(
     // nodes): a rebuild every frame does not pay fresh memory's page faults again.
     let mut scratches: Vec<gridrt_grid::BuildScratch> = strategies.iter().map(|_| Default::default()).collect();
     let mut pose_ms = 0.0;
-    for k in 0..frames {
-        pb.set_message(format!("{name} · frame {k}"));
+    // A warm-up frame first (the first frame's pose), counted for no strategy: the refit trees'
+    // setup build, the grids' first build into fresh memory, every allocator's first frame.
+    // The frames after it are the steady state of a scene played frame after frame.
+    for (k, warm_up) in std::iter::once((0, true)).chain((0..frames).map(|k| (k, false))) {
+        pb.set_message(format!("{name} · frame {k}{}", if warm_up { " (warm-up)" } else { "" }));
         let t = clip.start + clip.duration() * k as f64 / frames as f64;
         let start = Instant::now();
         player.pose(t)?;
-        pose_ms += start.elapsed().as_secs_f64() * 1e3;
+        if !warm_up {
+            pose_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
         let tris = &player.tris;
         let mut reference: Option<(Vec<Hit>, Vec<Hit>)> = None;
         for (s, &strategy) in strategies.iter().enumerate() {
-            // The refit tree is built on the first frame: its setup, not a frame's build.
-            let setup_frame = strategy.refit() && k == 0;
             let start = Instant::now();
             let built = match strategy {
                 Strategy::Grid(kind) | Strategy::GridPackets(kind) => Built::Grid(
@@ -302,12 +307,14 @@ fn bench_scene(
             let traced = Instant::now();
             let sum = &mut sums[s];
             let build_ms = (built_at - start).as_secs_f64() * 1e3;
-            if setup_frame {
-                sum.setup_ms += build_ms;
+            if warm_up {
+                if strategy.refit() {
+                    sum.setup_ms += build_ms;
+                }
             } else {
                 sum.build_ms += build_ms;
+                sum.trace_ms += (traced - built_at).as_secs_f64() * 1e3;
             }
-            sum.trace_ms += (traced - built_at).as_secs_f64() * 1e3;
             // The first strategy (the flat grid) is the reference of the others.
             match &reference {
                 Some((rp, rs)) => {
@@ -336,8 +343,6 @@ fn bench_scene(
             let grid = matches!(strategy, Strategy::Grid(_) | Strategy::GridPackets(_));
             let refit = strategy.refit();
             let Totals { setup_ms: setup, build_ms: build, trace_ms: trace, mismatches: bad } = *t;
-            // A refit's first frame is its setup build: averaged over the remaining frames.
-            let build_frames = if refit { (n - 1.0).max(1.0) } else { n };
             DynamicRow {
                 scene: name.clone(),
                 triangles: player.tris.len(),
@@ -347,9 +352,9 @@ fn bench_scene(
                 frames,
                 pose_ms: pose_ms / n,
                 setup_ms: setup,
-                build_ms: build / build_frames,
+                build_ms: build / n,
                 trace_ms: trace / n,
-                total_ms: build / build_frames + trace / n,
+                total_ms: (build + trace) / n,
                 mismatches: bad,
             }
         })
