@@ -6,8 +6,10 @@
 
 use gridrt_grid::GridConfig;
 
-/// Where an error came from.
+/// Where an error came from. The build's whole configuration is kept (to compare with the next
+/// one), so the enum is large; the app holds at most one error of each kind.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)]
 pub enum ErrorKind {
     /// The GPU could not be set up.
     Gpu,
