@@ -66,16 +66,41 @@ pub fn triangle_bounds(tris: &[[Vec3; 3]]) -> Aabb {
     triangle_bounds_with(tris, false)
 }
 
+/// [`triangle_bounds`] and, for each run of [`resolution::COUNT_CHUNK`] triangles, its widest
+/// triangle extent per axis, in one pass (on all threads when `parallel`): guess-and-check then
+/// skips reading the runs whose triangles are all narrower than a cell (see
+/// [`resolution::count_refs_curve_with`]).
+pub fn triangle_bounds_and_extents(tris: &[[Vec3; 3]], parallel: bool) -> (Aabb, resolution::ChunkExtents) {
+    let one = resolution::ChunkExtents::bounds_and_widest;
+    #[cfg(feature = "parallel")]
+    let parts: Vec<(Aabb, Vec3)> = if parallel {
+        use rayon::prelude::*;
+        tris.par_chunks(resolution::COUNT_CHUNK).map(one).collect()
+    } else {
+        tris.chunks(resolution::COUNT_CHUNK).map(one).collect()
+    };
+    #[cfg(not(feature = "parallel"))]
+    let parts: Vec<(Aabb, Vec3)> = {
+        let _ = parallel;
+        tris.chunks(resolution::COUNT_CHUNK).map(one).collect()
+    };
+    let bounds = parts.iter().fold(Aabb::EMPTY, |a, (b, _)| a.union(b));
+    (bounds, resolution::ChunkExtents(parts.into_iter().map(|(_, w)| w).collect()))
+}
+
 /// [`triangle_bounds`], on all threads when `parallel` (and the `parallel` feature) is on.
 /// Min and max are exact, so the result does not depend on the split.
 pub fn triangle_bounds_with(tris: &[[Vec3; 3]], parallel: bool) -> Aabb {
     #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
-        return tris.par_chunks(16 * 1024).map(Aabb::of_triangles).reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
+        return tris
+            .par_chunks(16 * 1024)
+            .map(|c| resolution::ChunkExtents::bounds_and_widest(c).0)
+            .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
     }
     let _ = parallel;
-    Aabb::of_triangles(tris)
+    resolution::ChunkExtents::bounds_and_widest(tris).0
 }
 
 /// Chooses the resolution and builds a flat grid: [`structure::build`] for [`GridKind::Flat`],

@@ -17,7 +17,7 @@ use crate::resolution::{self, CostModel, Resolution, ResolutionChoice};
 use crate::stats::{BatchStats, RayStats, StructureStats};
 use crate::trace::{TraceOptions, trace_batch, trace_flat};
 use crate::twolevel::TwoLevelOptions;
-use crate::{BuildError, triangle_bounds_with};
+use crate::{BuildError, triangle_bounds_and_extents};
 
 /// The structures (`--grid`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -313,9 +313,11 @@ fn build_on(
     scratch: Option<&mut BuildScratch>,
 ) -> Result<(AnyGrid, BuildReport), BuildError> {
     let mut times = PhaseTimes::default();
-    let bounds = times.record("bounds", || triangle_bounds_with(tris, cfg.build.parallel));
+    let (bounds, extents) = times.record("bounds", || triangle_bounds_and_extents(tris, cfg.build.parallel));
     let choose = |times: &mut PhaseTimes, policy: Resolution| {
-        times.record("resolution", || resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.parallel))
+        times.record("resolution", || {
+            resolution::choose_with(tris, &bounds, Some(&extents), policy, &cfg.cost, cfg.build.parallel)
+        })
     };
     // Every resolution, explicit or chosen, obeys the same cell limit as the auto choice.
     let choose = |times: &mut PhaseTimes, policy: Resolution| -> Result<ResolutionChoice, BuildError> {

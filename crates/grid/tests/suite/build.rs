@@ -330,10 +330,47 @@ fn guess_and_check_estimate_tracks_the_exact_count() {
             assert!(counted < tris.len(), "{name}: nothing was sampled");
             let (serial, _) = resolution::count_refs_curve(tris, &b, &res, mode, false);
             assert_eq!(est, serial, "{name} {mode:?}: the estimate depends on the thread split");
+            // With the widest extents per run (the bounds pass's, computed here whatever the
+            // scene's size), runs of small triangles are not read but for their sample: the
+            // same counts and the same choice.
+            let extents = resolution::ChunkExtents(
+                tris.chunks(resolution::COUNT_CHUNK).map(resolution::ChunkExtents::widest).collect(),
+            );
+            for parallel in [true, false] {
+                let (with, _) = resolution::count_refs_curve_with(tris, &b, Some(&extents), &res, mode, parallel);
+                assert_eq!(with, est, "{name} {mode:?}: the extents changed the counts");
+                let model = CostModel::memory_aware();
+                assert_eq!(
+                    resolution::choose_with(tris, &b, Some(&extents), Resolution::Auto, &model, parallel),
+                    resolution::choose(tris, &b, Resolution::Auto, &model, parallel),
+                    "{name}"
+                );
+            }
             for (r, e) in res.iter().zip(&est) {
                 let exact = resolution::count_refs(tris, &b, *r, mode, true);
                 let err = (*e as f64 / exact as f64 - 1.0).abs();
                 assert!(err < 0.02, "{name} {mode:?} at {r:?}: estimate {e} vs exact {exact} ({:.2}%)", err * 100.0);
+            }
+        }
+    }
+}
+
+/// The bounds pass with extents: the same bounds as the scene crate's, and each run's widest
+/// extent per axis bounds every triangle of the run.
+#[test]
+fn bounds_pass_extents_bound_every_triangle_of_their_run() {
+    for tris in
+        [tris_of(SceneKind::Mountain, 7), tris_of(SceneKind::Particles, 30_000), tris_of(SceneKind::Slivers, 100)]
+    {
+        for parallel in [true, false] {
+            let (b, e) = gridrt_grid::triangle_bounds_and_extents(&tris, parallel);
+            assert_eq!(b, gridrt_scene::Aabb::of_triangles(&tris));
+            assert_eq!(b, gridrt_grid::triangle_bounds_with(&tris, parallel));
+            assert_eq!(e.0.len(), tris.len().div_ceil(resolution::COUNT_CHUNK));
+            for (w, run) in e.0.iter().zip(tris.chunks(resolution::COUNT_CHUNK)) {
+                let widest = |t: &[Vec3; 3]| t[0].max(t[1]).max(t[2]) - t[0].min(t[1]).min(t[2]);
+                assert!(run.iter().all(|t| widest(t).cmple(*w).all()));
+                assert!(run.iter().any(|t| widest(t).x == w.x));
             }
         }
     }
