@@ -97,6 +97,7 @@ pub fn refill_par<T: Copy + Default + Send + Sync>(
     v.clear();
     v.try_reserve_exact(n)
         .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
+    advise_huge_pages(v);
     // Below 256 KiB the threads' hand-over costs more than the writes.
     if n * size_of::<T>() < 1 << 18 {
         v.resize(n, T::default());
@@ -122,12 +123,44 @@ pub fn resize_for_overwrite<T: Copy + Default + Send + Sync>(
     refill_par(v, n, what)
 }
 
+/// Arrays from this size up ask for transparent huge pages.
+const HUGE_PAGE_ARRAY_BYTES: usize = 4 << 20;
+
+/// Asks the kernel to back `v`'s allocation with 2 MiB pages before it is first written (Linux,
+/// where transparent huge pages are often in "madvise" mode): a fresh array of tens of MiB
+/// otherwise takes a page fault every 4 KiB, which cost about a third of a one-shot build of
+/// millions of triangles. Advice only: nothing changes where it is ignored.
+fn advise_huge_pages<T>(v: &Vec<T>) {
+    #[cfg(target_os = "linux")]
+    {
+        let bytes = v.capacity() * size_of::<T>();
+        if bytes < HUGE_PAGE_ARRAY_BYTES {
+            return;
+        }
+        const PAGE: usize = 4096;
+        let start = v.as_ptr() as usize;
+        let first = start.next_multiple_of(PAGE);
+        let end = (start + bytes) & !(PAGE - 1);
+        if end > first {
+            // SAFETY: madvise only advises on pages of this allocation, which `v` owns; it
+            // neither reads nor moves them.
+            #[allow(unsafe_code)]
+            unsafe {
+                libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = v;
+}
+
 /// A vector of `n` default values, or [`BuildError::OutOfMemory`] when the allocator refuses
 /// (an address-space limit) instead of aborting the process.
 pub fn zeroed<T: Copy + Default>(n: usize, what: &'static str) -> Result<Vec<T>, BuildError> {
     let mut v = Vec::new();
     v.try_reserve_exact(n)
         .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
+    advise_huge_pages(&v);
     v.resize(n, T::default());
     Ok(v)
 }
