@@ -662,19 +662,23 @@ fn app_screenshots_under_xvfb() {
     let png = out_dir.join("app-crowd-playing.png");
     let (good, log) = app(&["--screenshot", s(&png), "--frames", "8", "--grid", "macrocell"]);
     assert!(good, "playing the crowd:\n{log}");
-    let shown: u64 = log
-        .split("animation: ")
-        .nth(1)
-        .and_then(|r| r.split_whitespace().next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("no animation stats in: {log}"));
-    assert!(shown >= 6, "only {shown} animation frames shown: {log}");
+    // Animation frames shown, from the smoke run's log.
+    let shown = |log: &str| -> u64 {
+        log.split("animation: ")
+            .nth(1)
+            .and_then(|r| r.split_whitespace().next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no animation stats in: {log}"))
+    };
+    assert!(shown(&log) >= 6, "only {} animation frames shown: {log}", shown(&log));
     assert!(log.contains(" fps (pose "), "{log}");
     println!("{}", log.lines().find(|l| l.contains("saved")).unwrap_or_default());
     let paused = |t: &str| {
         let png = out_dir.join(format!("app-crowd-{t}.png"));
         let (good, log) = app(&["--screenshot", s(&png), "--frames", "1", "--paused", "--time", t]);
-        assert!(good && log.contains("animation: 1 frames shown"), "paused at {t}:\n{log}");
+        // One pose, shown once or (when a settings change rebuilds it before the screenshot,
+        // which depends on timing) twice.
+        assert!(good && (1..=2).contains(&shown(&log)), "paused at {t}:\n{log}");
         centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
     };
     let (a, b) = (paused("0.3"), paused("2.1"));
@@ -684,7 +688,8 @@ fn app_screenshots_under_xvfb() {
     let png = out_dir.join("app-crowd-gpu-build.png");
     let (good, log) = app(&["--screenshot", s(&png), "--frames", "5", "--gpu-build"]);
     assert!(good && log.contains("structure built on the GPU"), "--gpu-build:\n{log}");
-    assert!(log.contains("animation: 5 frames shown") || log.contains("animation: 4 frames shown"), "{log}");
+    // One frame more or less than asked: the screenshot's own frame may show the next pose.
+    assert!((4..=6).contains(&shown(&log)), "{log}");
     println!("{}", log.lines().find(|l| l.contains("saved")).unwrap_or_default());
     let (good, log) = app(&["--screenshot", s(&out_dir.join("app-crowd-bad.png")), "--animation", "nope"]);
     assert!(!good && log.contains("no animation \"nope\""), "an unknown clip must fail the run:\n{log}");
