@@ -53,6 +53,13 @@ impl CellBox {
     fn z_range(self) -> (u32, u32) {
         (self.0[0] >> 20, self.0[1] >> 20)
     }
+    /// How many slabs the range meets (its copies when binned), `slab_of_layer` the slab of
+    /// each z layer.
+    #[inline(always)]
+    fn slabs_met(self, slab_of_layer: &[u32]) -> u64 {
+        let (z0, z1) = self.z_range();
+        (slab_of_layer[z1 as usize] - slab_of_layer[z0 as usize]) as u64 + 1
+    }
 }
 
 /// One chunk of triangles sorted by slab: slab `s` owns `items[start[s]..start[s + 1]]`, each a
@@ -152,14 +159,8 @@ pub fn flat_grid_reusing(
                     let mut boxes = boxes.borrow_mut();
                     boxes.clear();
                     boxes.extend(part.iter().map(range_of));
-                    let pairs: usize = boxes
-                        .iter()
-                        .map(|b| {
-                            let (z0, z1) = b.z_range();
-                            (slab_of_layer[z1 as usize] - slab_of_layer[z0 as usize]) as usize + 1
-                        })
-                        .sum();
-                    (pairs <= 4 * part.len()).then(|| bin_chunk(k, &boxes, many, &edge, &slab_of_layer))
+                    let pairs: u64 = boxes.iter().map(|b| b.slabs_met(&slab_of_layer)).sum();
+                    (pairs <= 4 * part.len() as u64).then(|| bin_chunk(k, &boxes, many, &edge, &slab_of_layer))
                 })
             })
             .collect();
@@ -173,13 +174,7 @@ pub fn flat_grid_reusing(
                 .into_iter()
                 .map(|n| (n, layout(n)))
                 .find(|(_, (_, of))| {
-                    let pairs: u64 = boxes
-                        .par_iter()
-                        .map(|b| {
-                            let (z0, z1) = b.z_range();
-                            (of[z1 as usize] - of[z0 as usize]) as u64 + 1
-                        })
-                        .sum();
+                    let pairs: u64 = boxes.par_iter().map(|b| b.slabs_met(of)).sum();
                     pairs <= 4 * tris.len() as u64
                 })
                 .expect("one slab holds each triangle once");
