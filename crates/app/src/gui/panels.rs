@@ -183,9 +183,22 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
         ui.add(egui::Slider::new(&mut c.t_step, 0.01..=10.0).logarithmic(true).text("Tstep"));
         ui.add(egui::Slider::new(&mut c.t_inter, 0.01..=10.0).logarithmic(true).text("Tinter"));
         ui.add(egui::Slider::new(&mut c.samples, 2..=64).text("samples"));
-        if ui.button("survey defaults").clicked() {
-            *c = Default::default();
-        }
+        ui.add(egui::Slider::new(&mut c.memory_weight, 0.0..=10.0).text("memory weight (steps per byte per triangle)"));
+        let mut cache_kib = c.cache_bytes / 1024.0;
+        ui.add(egui::Slider::new(&mut cache_kib, 0.0..=65536.0).logarithmic(true).text("cache (KiB)"));
+        c.cache_bytes = cache_kib * 1024.0;
+        let mut dram_mib = c.dram_bytes / (1024.0 * 1024.0);
+        ui.add(egui::Slider::new(&mut dram_mib, 0.0..=4096.0).logarithmic(true).text("DRAM tier from (MiB)"));
+        c.dram_bytes = dram_mib * 1024.0 * 1024.0;
+        ui.add(egui::Slider::new(&mut c.dram_weight, 0.0..=32.0).text("DRAM weight"));
+        ui.horizontal(|ui| {
+            if ui.button("survey defaults").clicked() {
+                *c = Default::default();
+            }
+            if ui.button("memory-aware defaults").clicked() {
+                *c = gridrt_grid::CostModel::memory_aware();
+            }
+        });
     });
     g.multires.cost = g.cost;
 
