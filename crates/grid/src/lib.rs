@@ -71,7 +71,7 @@ pub fn triangle_bounds(tris: &[[Vec3; 3]]) -> Aabb {
 /// skips reading the runs whose triangles are all narrower than a cell (see
 /// [`resolution::count_refs_curve_with`]).
 pub fn triangle_bounds_and_extents(tris: &[[Vec3; 3]], parallel: bool) -> (Aabb, resolution::ChunkExtents) {
-    let one = resolution::ChunkExtents::bounds_and_widest;
+    let one = Aabb::of_triangles_and_widest;
     #[cfg(feature = "parallel")]
     let parts: Vec<(Aabb, Vec3)> = if parallel {
         use rayon::prelude::*;
@@ -94,13 +94,10 @@ pub fn triangle_bounds_with(tris: &[[Vec3; 3]], parallel: bool) -> Aabb {
     #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
-        return tris
-            .par_chunks(16 * 1024)
-            .map(|c| resolution::ChunkExtents::bounds_and_widest(c).0)
-            .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
+        return tris.par_chunks(16 * 1024).map(Aabb::of_triangles).reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
     }
     let _ = parallel;
-    resolution::ChunkExtents::bounds_and_widest(tris).0
+    Aabb::of_triangles(tris)
 }
 
 /// Chooses the resolution and builds a flat grid: [`structure::build`] for [`GridKind::Flat`],

@@ -435,35 +435,10 @@ pub fn count_refs_curve(
 pub const COUNT_CHUNK: usize = 8192;
 
 /// Per run of [`COUNT_CHUNK`] triangles (in order), the widest of its triangles' extents on each
-/// axis (`max − min` of its corners, in f32): [`crate::triangle_bounds_and_extents`]' by-product.
+/// axis (`max − min` of its corners, in f32; [`Aabb::of_triangles_and_widest`]):
+/// [`crate::triangle_bounds_and_extents`]' by-product.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ChunkExtents(pub Vec<Vec3>);
-
-impl ChunkExtents {
-    /// The bounds of `part` and the widest extent per axis of its triangles, in one loop on
-    /// SIMD lanes (exact min and max, as [`Aabb::of_triangles`]', which is 1.8–2.8× slower on
-    /// scenes of millions of triangles: its per-vertex lanes did not compile to SIMD).
-    pub fn bounds_and_widest(part: &[[Vec3; 3]]) -> (Aabb, Vec3) {
-        use glam::Vec3A;
-        let (mut lo, mut hi, mut w) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, Vec3A::ZERO);
-        for t in part {
-            let (a, b, c) = (Vec3A::from(t[0]), Vec3A::from(t[1]), Vec3A::from(t[2]));
-            let (tl, th) = (a.min(b).min(c), a.max(b).max(c));
-            lo = lo.min(tl);
-            hi = hi.max(th);
-            w = w.max(th - tl);
-        }
-        if part.is_empty() {
-            return (Aabb::EMPTY, Vec3::ZERO);
-        }
-        (Aabb { min: lo.into(), max: hi.into() }, w.into())
-    }
-
-    /// The widest extent per axis of the triangles of `part`.
-    pub fn widest(part: &[[Vec3; 3]]) -> Vec3 {
-        part.iter().fold(Vec3::ZERO, |w, t| w.max(t[0].max(t[1]).max(t[2]) - t[0].min(t[1]).min(t[2])))
-    }
-}
 
 /// Cells of slack on a run's widest extent before all of its triangles are taken as narrower
 /// than a cell: a triangle's width in [`count_refs_curve`] is measured from the grid's corner
@@ -540,15 +515,13 @@ fn count_curve<const SKIP: bool>(
         let e = ((hi - lo) * grids[0].inv_cell).max_element() + 2.0 * INSERT_MARGIN_CELLS as f32;
         STRATUM_WIDTH.iter().position(|&w| e < w)
     };
-    // `exact[s]`: stratum s is counted exactly (all of it) rather than sampled; `large`: the
-    // large triangles are counted.
     // Whether every triangle of run `i` is surely in the small stratum.
     let all_small = |i: usize| {
         SKIP && stride > 1
             && extents.and_then(|e| e.get(i)).is_some_and(|w| all_narrower_than_a_cell(*w, grids[0].inv_cell))
     };
-    // A run of small triangles, all in the sampled stratum: only the sample is read, the
-    // others are counted as the stratum's members.
+    // `exact[s]`: stratum s is counted exactly (all of it) rather than sampled; `large`: the
+    // large triangles are counted.
     let tally = |exact: [bool; STRATA], large: bool, base: usize, part: &[[Vec3; 3]]| {
         let mut t = Tally::new(k);
         for (j, tri) in part.iter().enumerate() {

@@ -53,12 +53,18 @@ impl CellBox {
     fn z_range(self) -> (u32, u32) {
         (self.0[0] >> 20, self.0[1] >> 20)
     }
-    /// How many slabs the range meets (its copies when binned), `slab_of_layer` the slab of
-    /// each z layer.
+    /// The slabs the range meets (its copies when binned), `slab_of_layer` the slab of each z
+    /// layer.
+    #[inline(always)]
+    fn slabs(self, slab_of_layer: &[u32]) -> std::ops::RangeInclusive<usize> {
+        let (z0, z1) = self.z_range();
+        slab_of_layer[z0 as usize] as usize..=slab_of_layer[z1 as usize] as usize
+    }
+    /// How many slabs the range meets.
     #[inline(always)]
     fn slabs_met(self, slab_of_layer: &[u32]) -> u64 {
-        let (z0, z1) = self.z_range();
-        (slab_of_layer[z1 as usize] - slab_of_layer[z0 as usize]) as u64 + 1
+        let r = self.slabs(slab_of_layer);
+        (r.end() - r.start()) as u64 + 1
     }
 }
 
@@ -115,13 +121,9 @@ pub fn flat_grid_reusing(
     // sort), and a slab reads its run of every chunk, chunks in order. Any layout gives the same
     // grid; it only decides how the work is cut.
     let bin_chunk = |k: usize, part: &[CellBox], slabs: usize, edge: &[u32], slab_of_layer: &[u32]| {
-        let slab_range = |b: &CellBox| {
-            let (z0, z1) = b.z_range();
-            slab_of_layer[z0 as usize] as usize..=slab_of_layer[z1 as usize] as usize
-        };
         let mut start = vec![0u32; slabs + 1];
         for b in part {
-            for s in slab_range(b) {
+            for s in b.slabs(slab_of_layer) {
                 start[s + 1] += 1;
             }
         }
@@ -134,7 +136,7 @@ pub fn flat_grid_reusing(
         for (j, b) in part.iter().enumerate() {
             let [lo, hi] = b.unpack();
             let row_cells = (hi.x - lo.x + 1) as u64 * (hi.y - lo.y + 1) as u64;
-            for s in slab_range(b) {
+            for s in b.slabs(slab_of_layer) {
                 items[next[s] as usize] = ((k * BIN_CHUNK + j) as u32, *b);
                 next[s] += 1;
                 let layers = hi.z.min(edge[s + 1] - 1) + 1 - lo.z.max(edge[s]);

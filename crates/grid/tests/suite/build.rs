@@ -334,7 +334,9 @@ fn guess_and_check_estimate_tracks_the_exact_count() {
             // scene's size), runs of small triangles are not read but for their sample: the
             // same counts and the same choice.
             let extents = resolution::ChunkExtents(
-                tris.chunks(resolution::COUNT_CHUNK).map(resolution::ChunkExtents::widest).collect(),
+                tris.chunks(resolution::COUNT_CHUNK)
+                    .map(|c| gridrt_scene::Aabb::of_triangles_and_widest(c).1)
+                    .collect(),
             );
             for parallel in [true, false] {
                 let (with, _) = resolution::count_refs_curve_with(tris, &b, Some(&extents), &res, mode, parallel);
