@@ -3,7 +3,7 @@
 //!
 //! [`trace`] tests the triangles one by one. [`BruteForce`] gives the same hits faster, for the
 //! exactness matrices and the benchmarks' checks: the corners are stored as nine arrays, so the
-//! watertight test's f32 pre-filter ([`certainly_outside`]) runs over eight triangles at once
+//! watertight test's f32 pre-filter ([`crate::triangle::certainly_outside`]) runs over eight triangles at once
 //! (compiled for AVX2, AVX and the baseline, picked at run time), lane by lane the scalar rule on
 //! the same values; the triangles it cannot reject take the scalar [`intersect`].
 
@@ -12,7 +12,7 @@ use gridrt_scene::{Hit, Ray};
 
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
-use crate::triangle::{certainly_outside, closer, intersect, shear};
+use crate::triangle::{LANES, Lanes, certainly_outside_tris8, closer, intersect};
 
 /// Closest hit of `ray` among `tris` (t, then index), with stats (every triangle is a test).
 pub fn trace(tris: &[[Vec3; 3]], ray: &Ray) -> (Hit, RayStats) {
@@ -35,12 +35,6 @@ fn test(r: &PreparedRay, tri: &[Vec3; 3], id: u32, best: &mut Hit) {
         *best = Hit { t: h.t, triangle: id, u: h.u, v: h.v };
     }
 }
-
-/// Triangles per pre-filter chunk.
-const LANES: usize = 8;
-
-/// Eight triangles' values of one coordinate.
-type Lanes = [f32; LANES];
 
 /// The triangles of a scene with their corners in nine arrays of eight-triangle chunks (corner
 /// `v`, axis `a` at `corner[3 * v + a]`, the last chunk padded): [`trace`]'s hits at several
@@ -83,19 +77,8 @@ fn trace_chunks(b: &BruteForce, r: &PreparedRay) -> Hit {
     let [[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]] = axes;
     for (k, start) in (0..n).step_by(LANES).enumerate() {
         let (x0, y0, z0, x1, y1, z1, x2, y2, z2) = (x0[k], y0[k], z0[k], x1[k], y1[k], z1[k], x2[k], y2[k], z2[k]);
-        let mut keep = 0u32;
-        for l in 0..LANES {
-            let sheared = |x: f32, y: f32, z: f32| {
-                let [x, y, _] = shear([x, y, z], r.org_k, [r.sx, r.sy]);
-                [x, y]
-            };
-            let outside = certainly_outside(
-                sheared(x0[l], y0[l], z0[l]),
-                sheared(x1[l], y1[l], z1[l]),
-                sheared(x2[l], y2[l], z2[l]),
-            );
-            keep |= u32::from(!outside) << l;
-        }
+        let corners = [[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]];
+        let mut keep = !certainly_outside_tris8(&corners, r.org_k, [r.sx, r.sy]) & ((1 << LANES) - 1);
         // Padding lanes past the last triangle.
         if start + LANES > n {
             keep &= (1u32 << (n - start)) - 1;

@@ -23,7 +23,7 @@ use crate::mailbox::Mailbox;
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
 use crate::trace::TraceOptions;
-use crate::triangle::{closer, intersect};
+use crate::triangle::{LANES, closer, intersect, may_hit8};
 
 /// What a search looks for ([`TraceOptions::query`]; the WGSL twin is `params.query`, `QUERY_*`
 /// in shaders/shared/types.wgsl). Shadow rays are [`Query::Any`].
@@ -68,13 +68,40 @@ impl<'a> ClosestHit<'a> {
         for &tri in refs {
             prefetch(self.tris, tri);
         }
+        // The triangles not mailboxed go through the f32 pre-filter eight at a time; only those
+        // it cannot reject take the exact test, in the order of `refs`.
+        let mut batch = [0u32; LANES];
+        let mut n = 0;
         for &tri in refs {
             if let Some(mb) = self.mailbox.as_mut()
                 && mb.check_and_insert(tri)
             {
                 continue;
             }
-            self.stats.tests += 1;
+            batch[n] = tri;
+            n += 1;
+            if n == LANES {
+                if self.test_batch(&batch) {
+                    return true;
+                }
+                n = 0;
+            }
+        }
+        if n > 0 && self.test_batch(&batch[..n]) {
+            return true;
+        }
+        self.done_at(t_exit)
+    }
+
+    /// Tests the triangles `ids` (at most [`LANES`]); true when an occlusion query is done.
+    #[inline]
+    fn test_batch(&mut self, ids: &[u32]) -> bool {
+        self.stats.tests += ids.len() as u32;
+        // One triangle is not worth the lanes: the exact test starts with the same pre-filter.
+        let mut keep = if ids.len() < 3 { (1u32 << ids.len()) - 1 } else { may_hit8(&self.ray, self.tris, ids) };
+        while keep != 0 {
+            let tri = ids[keep.trailing_zeros() as usize];
+            keep &= keep - 1;
             if let Some(h) = intersect(&self.ray, &self.tris[tri as usize])
                 && closer(h.t, tri, self.best.t, self.best.triangle)
             {
@@ -84,7 +111,7 @@ impl<'a> ClosestHit<'a> {
                 }
             }
         }
-        self.done_at(t_exit)
+        false
     }
 
     /// True when the best hit lies before `t_exit` (the end of a cell or block just crossed).
