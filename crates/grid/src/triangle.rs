@@ -126,6 +126,7 @@ pub type Lanes = [f32; LANES];
 /// the scalar rule's operations in the same order, so it rejects exactly what
 /// [`intersect`]'s pre-filter rejects; the loop vectorizes in the caller's target features.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // `l` is the lane of every one of the nine arrays
 pub fn certainly_outside_tris8(c: &[[Lanes; 3]; 3], o: [f32; 3], s: [f32; 2]) -> u32 {
     let mut mask = 0u32;
     for l in 0..LANES {
