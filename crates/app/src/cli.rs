@@ -247,13 +247,13 @@ pub struct GridArgs {
     pub serial: bool,
     /// Cost model Tsetup (survey §3.2). Without any of --t-setup/--t-step/--t-inter, the
     /// calibration saved by `gridrt experiment cost-constants --save` is used when it exists,
-    /// else the survey's 1.0, 0.1, 0.5.
+    /// else the memory-aware model's 1.0, 0.1, 0.35 (the survey's Tinter is 0.5).
     #[arg(long)]
     pub t_setup: Option<f64>,
     /// Cost model Tstep (default 0.1, or the calibration's).
     #[arg(long)]
     pub t_step: Option<f64>,
-    /// Cost model Tinter (default 0.5, or the calibration's).
+    /// Cost model Tinter (default 0.35, or the calibration's).
     #[arg(long)]
     pub t_inter: Option<f64>,
     /// Memory weight of the auto resolution: cell steps' worth of time per byte of grid per

@@ -26,7 +26,10 @@
 //!   5–8 cells per triangle while T(m) picks ~20 (a ½…2× sweep around it, 2026-12-02). w = 2
 //!   cell steps per byte per triangle is the value that puts every swept optimum of the shared
 //!   scenes within T's reach on this machine (the README has the sweeps; 1.5 until the
-//!   traversal's per-cell costs dropped, 2026-12-04).
+//!   traversal's per-cell costs dropped, 2026-12-04). Its Tinter is 0.35, not the survey's
+//!   0.5 ([`MEMORY_AWARE_T_INTER`]): since a cell's triangles are pre-filtered eight at a time,
+//!   a test costs less next to a step, and the sweeps' fastest m moved to 0.6–0.85× the
+//!   choice made with 0.5 (2026-12-04).
 //! - the DRAM tier ([`CostModel::dram_bytes`], 16 MiB, weight 8 in the memory-aware model): a
 //!   grid that outgrows the caches pays main memory's latency on the walk's misses. On the
 //!   shared scenes (auto grids of at most 15 MB) it changes nothing; on the 1M-triangle crowd,
@@ -49,6 +52,11 @@ use wide::{f32x4, i32x4};
 /// [`CostModel::memory_aware`]'s cache: grids of a few KiB (tens of triangles) pay almost no
 /// memory term, grids of megabytes nearly all of it. Read the README's tables for the value.
 pub const MEMORY_AWARE_CACHE_BYTES: f64 = (1024 * 1024) as f64;
+
+/// [`CostModel::memory_aware`]'s Tinter (Tstep stays the survey's 0.1): a triangle test in
+/// cell steps, now that a cell's triangles are pre-filtered eight at a time. Read the README's
+/// tables for the sweeps behind the value.
+pub const MEMORY_AWARE_T_INTER: f64 = 0.35;
 
 /// [`CostModel::memory_aware`]'s DRAM tier: the bytes of grid beyond which a walk's misses go to
 /// main memory, and their weight (cell steps per byte per triangle, on top of the memory
@@ -107,12 +115,14 @@ impl Default for CostModel {
 }
 
 impl CostModel {
-    /// The survey's constants with the memory term (see the module doc).
+    /// The survey's constants with the memory term and a cheaper triangle test (see the module
+    /// doc).
     /// Its interval, from M = N to the memory cap (64 cells per triangle), is narrower than the
     /// survey's in m, so 12 samples space m as finely as 24 do there (each sample is a counting
     /// pass, the largest part of a mid-size build).
     pub fn memory_aware() -> CostModel {
         CostModel {
+            t_inter: MEMORY_AWARE_T_INTER,
             memory_weight: 2.0,
             samples: 12,
             cache_bytes: MEMORY_AWARE_CACHE_BYTES,

@@ -58,7 +58,7 @@ pub fn path() -> Option<PathBuf> {
 }
 
 /// The cost model the command line's auto resolution uses: the saved calibration's CPU
-/// constants when there is one, else the survey's; and a note saying which.
+/// constants when there is one, else the memory-aware model's; and a note saying which.
 pub fn active_cost_model() -> (CostModel, String) {
     let mut m = CostModel::memory_aware();
     let w = m.memory_weight;
@@ -67,7 +67,13 @@ pub fn active_cost_model() -> (CostModel, String) {
             c.apply_to(&mut m);
             (m, format!("calibrated constants from {} and memory weight {w}", path.display()))
         }
-        None => (m, format!("the survey's constants (Tsetup 1.0, Tstep 0.1, Tinter 0.5) and memory weight {w}")),
+        None => (
+            m,
+            format!(
+                "the memory-aware constants (Tsetup {}, Tstep {}, Tinter {}) and memory weight {w}",
+                m.t_setup, m.t_step, m.t_inter
+            ),
+        ),
     }
 }
 

@@ -259,6 +259,9 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     // the grid's bytes per triangle weighted, and the choice is coarser than the survey's.
     let aware = CostModel::memory_aware();
     assert_eq!(aware.memory_weight, 2.0, "the weight calibrated on this machine (README)");
+    // T(m) with the memory-aware model's cheaper triangle test.
+    assert_eq!((aware.t_setup, aware.t_step, aware.t_inter), (1.0, 0.1, 0.35), "the README's values");
+    let t_of = CostModel { t_inter: 0.35, ..model };
     let choice = resolution::choose(&tris, &b, Resolution::Auto, &aware, true);
     let lo = (tris.len() as f64).cbrt();
     assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
@@ -266,14 +269,14 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         // The term scaled by the share of the grid's bytes the cache does not hold.
         let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
         let missed = bytes / (bytes + 1024.0 * 1024.0);
-        let expected = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 2.0 * missed * bytes / tris.len() as f64;
+        let expected = t_of.cost(s.cells, s.n_m, tris.len()) + 0.1 * 2.0 * missed * bytes / tris.len() as f64;
         assert!((s.cost - expected).abs() < 1e-9, "{s:?}");
     }
     // Without the cache (the term as first calibrated) the weight applies whole.
     let uncached = CostModel { cache_bytes: 0.0, ..aware };
     let s = &choice.curve[0];
     let bytes = 4.125 * s.cells as f64 + 4.0 * s.n_m as f64;
-    let whole = model.cost(s.cells, s.n_m, tris.len()) + 0.1 * 2.0 * bytes / tris.len() as f64;
+    let whole = t_of.cost(s.cells, s.n_m, tris.len()) + 0.1 * 2.0 * bytes / tris.len() as f64;
     assert!((uncached.cost(s.cells, s.n_m, tris.len()) - whole).abs() < 1e-9);
     // The DRAM tier: the default's 16 MiB are far beyond this small grid (no term); with the
     // tier at a fraction of the grids' bytes, every byte beyond it weighs 8 cell steps more per
