@@ -5,14 +5,14 @@
 //! exactness matrices and the benchmarks' checks: the corners are stored as nine arrays, so the
 //! watertight test's f32 pre-filter ([`crate::triangle::certainly_outside`]) runs over eight triangles at once
 //! (compiled for AVX2, AVX and the baseline, picked at run time), lane by lane the scalar rule on
-//! the same values; the triangles it cannot reject take the scalar [`intersect`].
+//! the same values; the triangles it cannot reject take the scalar exact test ([`intersect_prefiltered`]).
 
 use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
 
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
-use crate::triangle::{LANES, Lanes, certainly_outside_tris8, closer, intersect};
+use crate::triangle::{LANES, Lanes, certainly_outside_tris8, closer, intersect, intersect_prefiltered};
 
 /// Closest hit of `ray` among `tris` (t, then index), with stats (every triangle is a test).
 pub fn trace(tris: &[[Vec3; 3]], ray: &Ray) -> (Hit, RayStats) {
@@ -86,7 +86,11 @@ fn trace_chunks(b: &BruteForce, r: &PreparedRay) -> Hit {
         while keep != 0 {
             let i = start + keep.trailing_zeros() as usize;
             keep &= keep - 1;
-            test(r, &b.tris[i], i as u32, &mut best);
+            if let Some(h) = intersect_prefiltered(r, &b.tris[i])
+                && closer(h.t, i as u32, best.t, best.triangle)
+            {
+                best = Hit { t: h.t, triangle: i as u32, u: h.u, v: h.v };
+            }
         }
     }
     best

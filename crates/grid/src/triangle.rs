@@ -49,6 +49,19 @@ pub fn shear(c: [f32; 3], o: [f32; 3], s: [f32; 2]) -> [f32; 3] {
 /// Watertight intersection of `r` with triangle `tri`; `None` on a miss.
 #[inline]
 pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
+    intersect_with::<true>(r, tri)
+}
+
+/// [`intersect`] for a triangle the batched pre-filter ([`certainly_outside_tris8`] and its
+/// packet twin) has already kept: the same result without running the pre-filter again.
+#[inline]
+pub fn intersect_prefiltered(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
+    intersect_with::<false>(r, tri)
+}
+
+/// The watertight test, with or without the f32 pre-filter (which changes no result).
+#[inline(always)]
+fn intersect_with<const PREFILTER: bool>(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     // The corners as nine floats, read at the ray's axis permutation (an index chosen at run
     // time into a `Vec3` would go through the stack); the same operations as translating the
     // whole corner and picking its components.
@@ -61,7 +74,7 @@ pub fn intersect(r: &PreparedRay, tri: &[Vec3; 3]) -> Option<TriHit> {
     let [cx, cy, cz] = sheared(2);
     // Most triangles a ray is tested against are misses the f32 edge functions already
     // decide; the exact f64 signs are needed only for the rest.
-    if certainly_outside([ax, ay], [bx, by], [cx, cy]) {
+    if PREFILTER && certainly_outside([ax, ay], [bx, by], [cx, cy]) {
         return None;
     }
     let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
@@ -175,7 +188,7 @@ mod tests {
     /// The eight-lane pre-filter keeps exactly the triangles the scalar pre-filter keeps, for
     /// every batch length and ray permutation, and never one `intersect` would hit and it drops.
     #[test]
-    fn may_hit8_is_the_scalar_pre_filter_lane_by_lane() {
+    fn may_hit8_is_the_scalar_pre_filter_lane_by_lane_and_the_exact_test_follows_it() {
         let f = |k: u32, s: u32| (k.wrapping_mul(2654435761).rotate_left(s) >> 8) as f32 / (1 << 24) as f32;
         let tris: Vec<[Vec3; 3]> = (0..64u32)
             .map(|i| {
@@ -210,6 +223,10 @@ mod tests {
                 let keep = !certainly_outside(c(0), c(1), c(2));
                 assert_eq!(mask >> l & 1 == 1, keep, "ray {k}, lane {l}");
                 kept += keep as u32;
+                if keep {
+                    // Past the pre-filter, the exact test alone gives the same result.
+                    assert_eq!(intersect_prefiltered(&r, tri), intersect(&r, tri), "ray {k}, lane {l}");
+                }
                 if intersect(&r, tri).is_some() {
                     assert!(keep, "ray {k}: a hit was pre-filtered out");
                     hits += 1;

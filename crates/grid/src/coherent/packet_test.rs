@@ -7,14 +7,14 @@
 //! baseline (two SSE halves on x86-64; NEON or simd128 elsewhere), picked at run time by the
 //! CPU's features (`multiversion`). Each lane does the scalar pre-filter's operations in the same
 //! order, so it rejects exactly the rays the scalar pre-filter rejects. The rays it cannot reject take the
-//! scalar [`crate::triangle::intersect`], so hits are those of single rays, bit for bit.
+//! scalar [`crate::triangle::intersect_prefiltered`], so hits are those of single rays, bit for bit.
 
 use glam::Vec3;
 use gridrt_scene::Hit;
 
 use super::frustum::Lane;
 use crate::ray::PreparedRay;
-use crate::triangle::{certainly_outside, closer, intersect, shear};
+use crate::triangle::{certainly_outside, closer, intersect_prefiltered, shear};
 
 /// Rays per SIMD chunk.
 pub const LANES: usize = 8;
@@ -142,7 +142,7 @@ fn test_rays(rays: &PacketRays, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) -> b
                     continue;
                 }
                 let i = i as usize;
-                if let Some(h) = intersect(&rays.ray[k], tri)
+                if let Some(h) = intersect_prefiltered(&rays.ray[k], tri)
                     && closer(h.t, id, best[i].t, best[i].triangle)
                 {
                     best[i] = Hit { t: h.t, triangle: id, u: h.u, v: h.v };

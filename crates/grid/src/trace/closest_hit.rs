@@ -23,7 +23,7 @@ use crate::mailbox::Mailbox;
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
 use crate::trace::TraceOptions;
-use crate::triangle::{LANES, closer, intersect, may_hit8};
+use crate::triangle::{LANES, closer, intersect, intersect_prefiltered, may_hit8};
 
 /// What a search looks for ([`TraceOptions::query`]; the WGSL twin is `params.query`, `QUERY_*`
 /// in shaders/shared/types.wgsl). Shadow rays are [`Query::Any`].
@@ -97,12 +97,25 @@ impl<'a> ClosestHit<'a> {
     #[inline]
     fn test_batch(&mut self, ids: &[u32]) -> bool {
         self.stats.tests += ids.len() as u32;
-        // One triangle is not worth the lanes: the exact test starts with the same pre-filter.
-        let mut keep = if ids.len() < 3 { (1u32 << ids.len()) - 1 } else { may_hit8(&self.ray, self.tris, ids) };
+        // One or two triangles are not worth the lanes: the exact test starts with the same
+        // pre-filter.
+        if ids.len() < 3 {
+            self.test_exact::<true>(ids, (1u32 << ids.len()) - 1)
+        } else {
+            self.test_exact::<false>(ids, may_hit8(&self.ray, self.tris, ids))
+        }
+    }
+
+    /// The exact tests of the triangles `ids[l]` for the bits `l` of `keep`, in order (with the
+    /// f32 pre-filter first unless `keep` comes from it); true when an occlusion query is done.
+    #[inline]
+    fn test_exact<const PREFILTER: bool>(&mut self, ids: &[u32], mut keep: u32) -> bool {
         while keep != 0 {
             let tri = ids[keep.trailing_zeros() as usize];
             keep &= keep - 1;
-            if let Some(h) = intersect(&self.ray, &self.tris[tri as usize])
+            let t = &self.tris[tri as usize];
+            let hit = if PREFILTER { intersect(&self.ray, t) } else { intersect_prefiltered(&self.ray, t) };
+            if let Some(h) = hit
                 && closer(h.t, tri, self.best.t, self.best.triangle)
             {
                 self.best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };

@@ -48,30 +48,28 @@ pub fn trace_batch(
     parallel: bool,
     one: impl Fn(&Ray) -> (Hit, RayStats) + Sync,
 ) -> (Vec<Hit>, BatchStats) {
-    let run = |chunk: &[Ray]| {
+    // Each chunk writes its hits in place (no per-chunk vectors copied into the result).
+    let run = |chunk: &[Ray], out: &mut [Hit]| {
         let mut stats = BatchStats::default();
-        let hits: Vec<Hit> = chunk
-            .iter()
-            .map(|r| {
-                let (h, s) = one(r);
-                stats.add(s, h.is_hit());
-                h
-            })
-            .collect();
-        (hits, stats)
+        for (r, h) in chunk.iter().zip(out) {
+            let (hit, s) = one(r);
+            stats.add(s, hit.is_hit());
+            *h = hit;
+        }
+        stats
     };
+    let mut hits = vec![Hit::MISS; rays.len()];
     #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
-        let parts: Vec<(Vec<Hit>, BatchStats)> = rays.par_chunks(1024).map(run).collect();
-        let mut hits = Vec::with_capacity(rays.len());
-        let mut stats = BatchStats::default();
-        for (h, s) in parts {
-            hits.extend(h);
-            stats = stats.merge(s);
-        }
+        let stats = rays
+            .par_chunks(1024)
+            .zip(hits.par_chunks_mut(1024))
+            .map(|(c, o)| run(c, o))
+            .reduce(BatchStats::default, BatchStats::merge);
         return (hits, stats);
     }
     let _ = parallel;
-    run(rays)
+    let stats = run(rays, &mut hits);
+    (hits, stats)
 }
