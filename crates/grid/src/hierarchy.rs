@@ -186,8 +186,10 @@ impl Hierarchy {
     fn walk_node(&self, n: u32, ray: &GridRay, traversal: Traversal, search: &mut ClosestHit) -> bool {
         let node = &self.nodes[n as usize];
         let mut t_enter = ray.t0;
-        walk(traversal, ray, node.res, |cell, addr, t_exit| {
-            search.visit_cell();
+        // Counted in the loop (a register), not in `search` (memory) at every cell.
+        let mut cells = 0;
+        let done = walk(traversal, ray, node.res, |cell, addr, t_exit| {
+            cells += 1;
             let entered = std::mem::replace(&mut t_enter, t_exit);
             // Empty leaves (most cells) are checked in the walk's loop; tests and descents are
             // calls, which keeps that loop small enough to be compiled into the walk.
@@ -196,7 +198,9 @@ impl Hierarchy {
                 Cell::Leaf(r) if r.is_empty() => search.done_at(t_exit),
                 Cell::Leaf(r) => self.test_leaf(search, r, t_exit),
             }
-        })
+        });
+        search.visit_cells(cells);
+        done
     }
 
     /// Walks child node `a`, which fills `cell` of the grid `ray` walks, over `[entered, t_exit]`.

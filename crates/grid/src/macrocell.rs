@@ -151,9 +151,13 @@ impl MacrocellGrid {
         let lo = m * self.a;
         let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0, t1, ..*fine_ray };
         let fine = &self.fine;
-        walk(traversal, &sub, UVec3::splat(self.a), |c, _, t_exit| {
+        let mut cells = 0;
+        let done = walk(traversal, &sub, UVec3::splat(self.a), |c, _, t_exit| {
+            cells += 1;
             fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
-        })
+        });
+        search.visit_cells(cells);
+        done
     }
 }
 

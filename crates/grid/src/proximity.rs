@@ -55,8 +55,10 @@ impl ProximityGrid {
             loop {
                 // Set when the walk leaves an empty cube: it restarts at the cube's exit.
                 let mut restart = None;
+                // Counted in the loop (a register), not in `search` (memory) at every cell.
+                let mut cells = 0;
                 walk(traversal, &gr, res, |cell, idx, t_exit| {
-                    search.visit_cell();
+                    cells += 1;
                     let k = self.distance[idx] as u32;
                     if k >= MIN_JUMP_DISTANCE {
                         // Leave the empty cube around this cell.
@@ -77,6 +79,7 @@ impl ProximityGrid {
                     }
                     self.grid.test_occupied(search, idx, t_exit)
                 });
+                search.visit_cells(cells);
                 match restart {
                     Some(t) => gr.t0 = t,
                     None => return,

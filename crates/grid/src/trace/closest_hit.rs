@@ -57,6 +57,12 @@ impl<'a> ClosestHit<'a> {
         self.stats.cells += 1;
     }
 
+    /// Counts `n` visited cells (a walk that kept its own count).
+    #[inline]
+    pub fn visit_cells(&mut self, n: u32) {
+        self.stats.cells += n;
+    }
+
     /// Tests the triangles `refs` of a leaf the ray leaves at `t_exit` (skipping mailboxed
     /// ones), keeping the closest hit by (t, index). True when the search is done: the best hit
     /// lies before `t_exit`, so no later cell can hold a closer one (an occlusion query: as soon

@@ -38,7 +38,12 @@ impl TraceOptions {
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
     closest_hit(tris, ray, opts, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
-        walk(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| grid.visit(search, index, t_exit));
+        let mut cells = 0;
+        walk(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| {
+            cells += 1;
+            grid.visit(search, index, t_exit)
+        });
+        search.visit_cells(cells);
     })
 }
 
