@@ -257,7 +257,7 @@ pub struct GridArgs {
     #[arg(long)]
     pub t_inter: Option<f64>,
     /// Memory weight of the auto resolution: cell steps' worth of time per byte of grid per
-    /// triangle (default 2; 0 is the survey's model and interval).
+    /// triangle (default 2; 0 with --t-inter 0.5 is the survey's model and interval).
     #[arg(long, value_parser = parse_memory_weight)]
     pub memory_weight: Option<f64>,
     /// Cache the memory term assumes, in KiB: a grid of B bytes pays B / (B + cache) of the
