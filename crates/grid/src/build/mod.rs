@@ -124,6 +124,7 @@ pub fn resize_for_overwrite<T: Copy + Default + Send + Sync>(
 }
 
 /// Arrays from this size up ask for transparent huge pages.
+#[cfg(target_os = "linux")]
 const HUGE_PAGE_ARRAY_BYTES: usize = 4 << 20;
 
 /// Asks the kernel to back `v`'s allocation with 2 MiB pages before it is first written (Linux,
