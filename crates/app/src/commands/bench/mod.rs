@@ -232,9 +232,48 @@ fn bench_scene(
             *built = Some(b);
         }
     }
-    for (subject, (build_s, built)) in subjects.into_iter().zip(builds) {
+    let built: Vec<(Subject, f64, Built)> = subjects
+        .into_iter()
+        .zip(builds)
+        .map(|(subject, (build_s, b))| Ok((subject, build_s, b.expect("at least one build round")?)))
+        .collect::<anyhow::Result<_>>()?;
+    // The traces are timed interleaved too, for the same reason as the builds: each round
+    // traces every subject's sets once, in a shuffled order, and each keeps its best round (it
+    // was each subject's rounds back to back: a burst of load on the machine then moved one
+    // subject's speed and not the others', and the same ratio moved by up to 1.6× between runs).
+    let packet_opts = PacketOptions { tile: args.tile, mailbox: true };
+    let walks_packets: Vec<bool> =
+        built.iter().map(|(_, _, b)| matches!(b, Built::Grid(g, _) if g.has_packets())).collect();
+    let mut single_best = vec![vec![f64::INFINITY; sets.len()]; built.len()];
+    let mut packet_best = vec![vec![f64::INFINITY; sets.len()]; built.len()];
+    let mut single_hits: Vec<Vec<Vec<Hit>>> = vec![Vec::new(); built.len()];
+    let mut packet_hits: Vec<Vec<Option<Vec<Hit>>>> = vec![vec![None; sets.len()]; built.len()];
+    for round in 0..(args.repeat as usize).max(1) {
+        let mut order: Vec<usize> = (0..built.len()).collect();
+        for i in (1..order.len()).rev() {
+            order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+        }
+        for k in order {
+            let (subject, _, b) = &built[k];
+            pb.set_message(format!("{} · {} (trace, round {})", sc.name, subject.name(), round + 1));
+            for (i, batch) in sets.iter().enumerate() {
+                let (s, h) = best_of(1, || b.trace(&sc.tris, &batch.rays));
+                single_best[k][i] = single_best[k][i].min(s);
+                if round == 0 {
+                    single_hits[k].push(h);
+                }
+                if let (Built::Grid(g, _), true, Some(width)) = (b, walks_packets[k], batch.width) {
+                    let opts = TraceOptions::MAILBOX;
+                    let (s, (h, _, _)) =
+                        best_of(1, || g.trace_packets(&sc.tris, &batch.rays, width, opts, packet_opts, true));
+                    packet_best[k][i] = packet_best[k][i].min(s);
+                    packet_hits[k][i].get_or_insert(h);
+                }
+            }
+        }
+    }
+    for (k, (subject, build_s, built)) in built.into_iter().enumerate() {
         pb.set_message(format!("{} · {}", sc.name, subject.name()));
-        let built = built.expect("at least one build round")?;
         let memory = built.memory_bytes();
         let mut single = Measured {
             structure: subject.name(),
@@ -243,10 +282,9 @@ fn bench_scene(
             build_s,
             memory,
             speeds: Vec::new(),
-            hits: Vec::new(),
+            hits: std::mem::take(&mut single_hits[k]),
         };
-        for batch in sets {
-            let (s, h) = best_of(args.repeat as usize, || built.trace(&sc.tris, &batch.rays));
+        for (i, batch) in sets.iter().enumerate() {
             let mut gpu_mrays = None;
             if let (Built::Grid(g, _), Some(gpu)) = (&built, gpu.as_ref()) {
                 let gs = gpu.upload(g)?;
@@ -257,16 +295,11 @@ fn bench_scene(
                 r?;
                 gpu_mrays = Some(rays.len() as f64 / s / 1e6);
             }
-            single.speeds.push(Some((batch.rays.len() as f64 / s / 1e6, gpu_mrays)));
-            single.hits.push(h);
+            single.speeds.push(Some((batch.rays.len() as f64 / single_best[k][i] / 1e6, gpu_mrays)));
         }
         let reference = reference.get_or_insert_with(|| single.hits.clone());
         let mut measured = vec![single];
-        if let Built::Grid(g, _) = &built
-            && g.has_packets()
-        {
-            let opts = TraceOptions::MAILBOX;
-            let packet_opts = PacketOptions { tile: args.tile, mailbox: true };
+        if walks_packets[k] {
             let mut packets = Measured {
                 structure: format!("{}, {t}×{t} packets", subject.name(), t = args.tile),
                 family: "grid packets",
@@ -277,16 +310,16 @@ fn bench_scene(
                 hits: Vec::new(),
             };
             for (i, batch) in sets.iter().enumerate() {
-                let Some(width) = batch.width else {
-                    packets.speeds.push(None);
-                    packets.hits.push(reference[i].clone());
-                    continue;
-                };
-                let (s, (h, _, _)) = best_of(args.repeat as usize, || {
-                    g.trace_packets(&sc.tris, &batch.rays, width, opts, packet_opts, true)
-                });
-                packets.speeds.push(Some((batch.rays.len() as f64 / s / 1e6, None)));
-                packets.hits.push(h);
+                match packet_hits[k][i].take() {
+                    Some(h) => {
+                        packets.speeds.push(Some((batch.rays.len() as f64 / packet_best[k][i] / 1e6, None)));
+                        packets.hits.push(h);
+                    }
+                    None => {
+                        packets.speeds.push(None);
+                        packets.hits.push(reference[i].clone());
+                    }
+                }
             }
             measured.push(packets);
         }
