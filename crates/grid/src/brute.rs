@@ -12,7 +12,7 @@ use gridrt_scene::{Hit, Ray};
 
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
-use crate::triangle::{LANES, Lanes, certainly_outside_tris8, closer, intersect, intersect_prefiltered};
+use crate::triangle::{LANES, Lanes, certainly_outside_tris8, intersect, intersect_prefiltered, keep_closer};
 
 /// Closest hit of `ray` among `tris` (t, then index), with stats (every triangle is a test).
 pub fn trace(tris: &[[Vec3; 3]], ray: &Ray) -> (Hit, RayStats) {
@@ -21,19 +21,9 @@ pub fn trace(tris: &[[Vec3; 3]], ray: &Ray) -> (Hit, RayStats) {
     };
     let mut best = Hit::MISS;
     for (i, tri) in tris.iter().enumerate() {
-        test(&r, tri, i as u32, &mut best);
+        keep_closer(&mut best, intersect(&r, tri), i as u32);
     }
     (best, RayStats { cells: 0, tests: tris.len() as u32 })
-}
-
-/// Tests triangle `tri` (index `id`) and keeps the closer of its hit and `best`.
-#[inline(always)]
-fn test(r: &PreparedRay, tri: &[Vec3; 3], id: u32, best: &mut Hit) {
-    if let Some(h) = intersect(r, tri)
-        && closer(h.t, id, best.t, best.triangle)
-    {
-        *best = Hit { t: h.t, triangle: id, u: h.u, v: h.v };
-    }
 }
 
 /// The triangles of a scene with their corners in nine arrays of eight-triangle chunks (corner
@@ -86,11 +76,7 @@ fn trace_chunks(b: &BruteForce, r: &PreparedRay) -> Hit {
         while keep != 0 {
             let i = start + keep.trailing_zeros() as usize;
             keep &= keep - 1;
-            if let Some(h) = intersect_prefiltered(r, &b.tris[i])
-                && closer(h.t, i as u32, best.t, best.triangle)
-            {
-                best = Hit { t: h.t, triangle: i as u32, u: h.u, v: h.v };
-            }
+            keep_closer(&mut best, intersect_prefiltered(r, &b.tris[i]), i as u32);
         }
     }
     best

@@ -171,8 +171,7 @@ impl FlatGrid {
 
     /// Whether the walk of `search` ends in cell `index`, which it leaves at `t_exit`: the
     /// cell's triangles are tested (an empty cell only checks the best hit so far). The caller
-    /// counts the visited cells ([`ClosestHit::visit_cells`]): a count kept in the walk's loop
-    /// stays in a register, one in `search` goes through memory at every cell.
+    /// counts the visited cells ([`crate::traversal::walk_counted`]).
     #[inline(always)]
     pub fn visit(&self, search: &mut ClosestHit, index: usize, t_exit: f32) -> bool {
         // Most cells are empty: their check stays in the walk's loop, and the tests of an

@@ -42,7 +42,7 @@ use crate::stats::{HierarchyStats, StructureStats};
 use crate::trace::TraceOptions;
 use crate::trace::closest_hit::ClosestHit;
 use crate::trace::closest_hit::closest_hit;
-use crate::traversal::{Traversal, walk};
+use crate::traversal::{Traversal, walk_counted};
 
 /// The builders' cell pairs: `[node, CHILD]` marks an internal cell, `[start, count]` a leaf
 /// (see [`Hierarchy::from_pairs`]).
@@ -186,10 +186,7 @@ impl Hierarchy {
     fn walk_node(&self, n: u32, ray: &GridRay, traversal: Traversal, search: &mut ClosestHit) -> bool {
         let node = &self.nodes[n as usize];
         let mut t_enter = ray.t0;
-        // Counted in the loop (a register), not in `search` (memory) at every cell.
-        let mut cells = 0;
-        let done = walk(traversal, ray, node.res, |cell, addr, t_exit| {
-            cells += 1;
+        let (done, cells) = walk_counted(traversal, ray, node.res, |cell, addr, t_exit| {
             let entered = std::mem::replace(&mut t_enter, t_exit);
             // Empty leaves (most cells) are checked in the walk's loop; tests and descents are
             // calls, which keeps that loop small enough to be compiled into the walk.

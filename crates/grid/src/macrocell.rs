@@ -29,7 +29,7 @@ use crate::geometry::{GridGeometry, GridRay, linear_index};
 use crate::stats::RayStats;
 use crate::trace::TraceOptions;
 use crate::trace::closest_hit::{ClosestHit, closest_hit};
-use crate::traversal::{Traversal, walk};
+use crate::traversal::{Traversal, walk_counted};
 
 /// Macrocell sizes the cost model chooses among.
 pub const MACRO_SIZES: [u32; 4] = [2, 4, 8, 16];
@@ -123,8 +123,7 @@ impl MacrocellGrid {
             // Exact: A is a power of two.
             let macro_ray = GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..fine_ray };
             let mut t_enter = fine_ray.t0;
-            walk(traversal, &macro_ray, self.macro_res, |m, maddr, m_exit| {
-                search.visit_cell();
+            let (_, cells) = walk_counted(traversal, &macro_ray, self.macro_res, |m, maddr, m_exit| {
                 // An occupied macrocell's fine walk is a call, keeping the macro walk's loop
                 // small (most macrocells are empty).
                 let entered = std::mem::replace(&mut t_enter, m_exit);
@@ -133,6 +132,7 @@ impl MacrocellGrid {
                 }
                 search.done_at(m_exit)
             });
+            search.visit_cells(cells);
         })
     }
 
@@ -151,9 +151,7 @@ impl MacrocellGrid {
         let lo = m * self.a;
         let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0, t1, ..*fine_ray };
         let fine = &self.fine;
-        let mut cells = 0;
-        let done = walk(traversal, &sub, UVec3::splat(self.a), |c, _, t_exit| {
-            cells += 1;
+        let (done, cells) = walk_counted(traversal, &sub, UVec3::splat(self.a), |c, _, t_exit| {
             fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
         });
         search.visit_cells(cells);

@@ -21,7 +21,7 @@ use crate::geometry::GridRay;
 use crate::stats::RayStats;
 use crate::trace::TraceOptions;
 use crate::trace::closest_hit::closest_hit;
-use crate::traversal::walk;
+use crate::traversal::walk_counted;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProximityGrid {
@@ -55,10 +55,7 @@ impl ProximityGrid {
             loop {
                 // Set when the walk leaves an empty cube: it restarts at the cube's exit.
                 let mut restart = None;
-                // Counted in the loop (a register), not in `search` (memory) at every cell.
-                let mut cells = 0;
-                walk(traversal, &gr, res, |cell, idx, t_exit| {
-                    cells += 1;
+                let (_, cells) = walk_counted(traversal, &gr, res, |cell, idx, t_exit| {
                     let k = self.distance[idx] as u32;
                     if k >= MIN_JUMP_DISTANCE {
                         // Leave the empty cube around this cell.

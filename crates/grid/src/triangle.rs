@@ -25,6 +25,7 @@
 //! - no back-face culling; `t` must be finite and inside `[tmin, tmax]` (closed interval).
 
 use glam::Vec3;
+use gridrt_scene::Hit;
 
 use crate::ray::PreparedRay;
 
@@ -172,6 +173,20 @@ pub fn may_hit8(r: &PreparedRay, tris: &[[Vec3; 3]], ids: &[u32]) -> u32 {
         }
     }
     !certainly_outside_tris8(&c, r.org_k, [r.sx, r.sy]) & ((1u32 << n) - 1)
+}
+
+/// Keeps `hit` of triangle `tri` as `best` when it is [`closer`]; true when it was. The one
+/// place a candidate replaces the best hit, for every search (single rays, packets, brute
+/// force).
+#[inline(always)]
+pub fn keep_closer(best: &mut Hit, hit: Option<TriHit>, tri: u32) -> bool {
+    match hit {
+        Some(h) if closer(h.t, tri, best.t, best.triangle) => {
+            *best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
+            true
+        }
+        _ => false,
+    }
 }
 
 /// Deterministic order of candidate hits: smaller `t`, then smaller triangle index.

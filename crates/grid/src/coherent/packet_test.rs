@@ -14,7 +14,7 @@ use gridrt_scene::Hit;
 
 use super::frustum::Lane;
 use crate::ray::PreparedRay;
-use crate::triangle::{certainly_outside, closer, intersect_prefiltered, shear};
+use crate::triangle::{certainly_outside, intersect_prefiltered, keep_closer, shear};
 
 /// Rays per SIMD chunk.
 pub const LANES: usize = 8;
@@ -142,12 +142,7 @@ fn test_rays(rays: &PacketRays, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) -> b
                     continue;
                 }
                 let i = i as usize;
-                if let Some(h) = intersect_prefiltered(&rays.ray[k], tri)
-                    && closer(h.t, id, best[i].t, best[i].triangle)
-                {
-                    best[i] = Hit { t: h.t, triangle: id, u: h.u, v: h.v };
-                    changed = true;
-                }
+                changed |= keep_closer(&mut best[i], intersect_prefiltered(&rays.ray[k], tri), id);
             }
         }
     }

@@ -23,7 +23,7 @@ use crate::mailbox::Mailbox;
 use crate::ray::PreparedRay;
 use crate::stats::RayStats;
 use crate::trace::TraceOptions;
-use crate::triangle::{LANES, closer, intersect, intersect_prefiltered, may_hit8};
+use crate::triangle::{LANES, intersect, intersect_prefiltered, keep_closer, may_hit8};
 
 /// What a search looks for ([`TraceOptions::query`]; the WGSL twin is `params.query`, `QUERY_*`
 /// in shaders/shared/types.wgsl). Shadow rays are [`Query::Any`].
@@ -121,13 +121,8 @@ impl<'a> ClosestHit<'a> {
             keep &= keep - 1;
             let t = &self.tris[tri as usize];
             let hit = if PREFILTER { intersect(&self.ray, t) } else { intersect_prefiltered(&self.ray, t) };
-            if let Some(h) = hit
-                && closer(h.t, tri, self.best.t, self.best.triangle)
-            {
-                self.best = Hit { t: h.t, triangle: tri, u: h.u, v: h.v };
-                if self.any {
-                    return true;
-                }
+            if keep_closer(&mut self.best, hit, tri) && self.any {
+                return true;
             }
         }
         false

@@ -8,7 +8,7 @@ use gridrt_scene::{Hit, Ray};
 
 use crate::flat::FlatGrid;
 use crate::stats::{BatchStats, RayStats};
-use crate::traversal::{Traversal, walk};
+use crate::traversal::{Traversal, walk_counted};
 pub use closest_hit::Query;
 use closest_hit::closest_hit;
 
@@ -38,11 +38,8 @@ impl TraceOptions {
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
     closest_hit(tris, ray, opts, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
-        let mut cells = 0;
-        walk(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| {
-            cells += 1;
-            grid.visit(search, index, t_exit)
-        });
+        let (_, cells) =
+            walk_counted(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| grid.visit(search, index, t_exit));
         search.visit_cells(cells);
     })
 }

@@ -134,6 +134,24 @@ pub fn walk(kind: Traversal, ray: &GridRay, res: UVec3, mut visit: impl FnMut(UV
     }
 }
 
+/// [`walk`], also counting the cells visited (for the rays' stats): `(stopped, cells)`. The
+/// count is a local of the walk's loop and stays in a register; counted in the search instead
+/// (behind the `&mut` every visit takes) it went through memory at every cell.
+#[inline]
+pub fn walk_counted(
+    kind: Traversal,
+    ray: &GridRay,
+    res: UVec3,
+    mut visit: impl FnMut(UVec3, usize, f32) -> bool,
+) -> (bool, u32) {
+    let mut cells = 0;
+    let stopped = walk(kind, ray, res, |cell, addr, t_exit| {
+        cells += 1;
+        visit(cell, addr, t_exit)
+    });
+    (stopped, cells)
+}
+
 /// What the exact walkers share: the cell they are in, the grid's resolution, the step
 /// direction per axis and whether the walk has ended. WGSL: `Cursor` in
 /// shaders/shared/walker_common.wgsl.

@@ -218,11 +218,7 @@ fn bench_scene(
     // Embree's threads spinning, starts faster or slower than it would otherwise.
     let mut rng = gridrt_scene::rng::Rng::new(7);
     for _ in 0..(args.repeat as usize).max(BUILD_ROUNDS) {
-        let mut order: Vec<usize> = (0..subjects.len()).collect();
-        for i in (1..order.len()).rev() {
-            order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
-        }
-        for k in order {
+        for k in shuffled(subjects.len(), &mut rng) {
             let (subject, (best, built)) = (subjects[k], &mut builds[k]);
             pb.set_message(format!("{} · {} (build)", sc.name, subject.name()));
             // The previous round's structure is dropped first, outside the timing.
@@ -249,11 +245,7 @@ fn bench_scene(
     let mut single_hits: Vec<Vec<Vec<Hit>>> = vec![Vec::new(); built.len()];
     let mut packet_hits: Vec<Vec<Option<Vec<Hit>>>> = vec![vec![None; sets.len()]; built.len()];
     for round in 0..(args.repeat as usize).max(1) {
-        let mut order: Vec<usize> = (0..built.len()).collect();
-        for i in (1..order.len()).rev() {
-            order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
-        }
-        for k in order {
+        for k in shuffled(built.len(), &mut rng) {
             let (subject, _, b) = &built[k];
             pb.set_message(format!("{} · {} (trace, round {})", sc.name, subject.name(), round + 1));
             for (i, batch) in sets.iter().enumerate() {
@@ -351,6 +343,16 @@ fn bench_scene(
         pb.inc(1);
     }
     Ok(rows)
+}
+
+/// `0..n` in a random order (Fisher–Yates): each timing round visits the subjects in another
+/// order.
+fn shuffled(n: usize, rng: &mut gridrt_scene::rng::Rng) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        order.swap(i, rng.below(i as u64 + 1) as usize);
+    }
+    order
 }
 
 /// Every disagreement with the flat grid's hits (`reference`), settled by brute force (the
