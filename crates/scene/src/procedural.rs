@@ -260,12 +260,23 @@ pub fn sphereflake(levels: u32, subdiv: u32) -> Generated {
 
 /// `count` small random triangles (edge ~ 0.005) uniformly in the unit cube: the point model.
 pub fn particles(count: usize, seed: u64) -> Mesh {
+    particles_of_radius(count, PARTICLE_RADIUS, seed)
+}
+
+/// The corners' distance from a particle's centre in [`particles`].
+pub const PARTICLE_RADIUS: f32 = 0.004;
+
+/// [`particles`] with corners at `radius` from each centre. Scaling `radius` with count^(-1/3)
+/// keeps the cloud's shape as the count grows (particles as large against their spacing); with a
+/// fixed radius a larger count is a more crowded cloud, whose grids hold more references per
+/// triangle.
+pub fn particles_of_radius(count: usize, radius: f32, seed: u64) -> Mesh {
     let mut rng = Rng::new(seed);
     let mut mesh = Mesh::default();
     for i in 0..count {
         let c = Vec3::new(rng.f32(), rng.f32(), rng.f32());
         for _ in 0..3 {
-            mesh.positions.push(c + rng.unit_vector() * 0.004);
+            mesh.positions.push(c + rng.unit_vector() * radius);
         }
         let b = 3 * i as u32;
         mesh.indices.push([b, b + 1, b + 2]);

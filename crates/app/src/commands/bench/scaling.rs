@@ -1,9 +1,15 @@
-//! Build time against triangle count, on two procedural families scaled up: particle clouds
+//! Build time against triangle count, on three procedural families scaled up: particle clouds
 //! (the point model, triangles in random order: the worst case for memory locality) from 100k
-//! to 2.4M triangles, and fractal mountains (a coherent surface) from 131k to 2.1M. Each is
+//! to 2.4M triangles, once with a fixed particle size (the cloud gets more crowded: a grid holds
+//! more references per triangle as N grows) and once with the size shrinking as N^(-1/3) (the
+//! same cloud, finer), and fractal mountains (a coherent surface) from 131k to 2.1M. Each is
 //! built as a flat grid with the auto resolution and, with the `peers` feature, as the `bvh`
 //! crate's and obvhs' fastest BVHs. The log–log slope of build time against N says how close
-//! to linear each build is (1 = linear).
+//! to linear each build is (1 = linear); for the grid also against its references (its output).
+//! Each point is the best of at least `--repeat` builds and of as many more as fit in a quarter
+//! of a second (at most 10), so the small, fast points are not one cold build.
+
+use std::time::Instant;
 
 use glam::Vec3;
 use gridrt_grid::CostModel;
@@ -17,10 +23,12 @@ use crate::lab::sweep::best_of;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ScalePoint {
-    /// "particles" or "mountain".
+    /// "particles", "particles, size ∝ N^-1/3" or "mountain".
     pub scene: &'static str,
     pub structure: String,
     pub triangles: usize,
+    /// Triangle–cell references of the grid (0 for the BVHs).
+    pub refs: u64,
     pub build_ms: f64,
     /// Nanoseconds of build per triangle.
     pub ns_per_triangle: f64,
@@ -35,8 +43,15 @@ pub fn cases(args: &BenchArgs) -> Vec<(&'static str, Vec<[Vec3; 3]>)> {
     };
     // A fractal mountain of level L has 2·4^L triangles.
     let levels: &[u32] = if args.quick { &[5, 6, 7] } else { &[8, 9, 10] };
+    let first = particles[0] as f32;
     let mut out: Vec<(&'static str, Vec<[Vec3; 3]>)> =
-        particles.into_iter().map(|n| ("particles", procedural::particles(n, 11).triangles())).collect();
+        particles.iter().map(|&n| ("particles", procedural::particles(n, 11).triangles())).collect();
+    // The same cloud at every N: the particles shrink as their spacing does (equal to the fixed
+    // family's at the first size).
+    out.extend(particles.iter().map(|&n| {
+        let radius = procedural::PARTICLE_RADIUS * (first / n as f32).cbrt();
+        ("particles, size ∝ N^-1/3", procedural::particles_of_radius(n, radius, 11).triangles())
+    }));
     out.extend(levels.iter().map(|&l| ("mountain", procedural::fractal_mountain(l, 3).triangles())));
     out
 }
@@ -63,12 +78,17 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<ScalePoint>
         let (scene, tris, n) = (*scene, tris.as_slice(), tris.len());
         for &s in &subjects {
             pb.set_message(format!("{} · {n} triangles", s.name()));
-            let (secs, r) = best_of(args.repeat as usize, || super::build(s, tris, cost).map(drop));
-            r?;
+            let (secs, built) = best_within(args.repeat as usize, || super::build(s, tris, cost));
+            let refs = match built? {
+                super::Built::Grid(g, _) => g.stats(n).refs,
+                #[cfg(feature = "peers")]
+                super::Built::Peer(_) => 0,
+            };
             out.push(ScalePoint {
                 scene,
                 structure: s.name(),
                 triangles: n,
+                refs,
                 build_ms: secs * 1e3,
                 ns_per_triangle: secs * 1e9 / n as f64,
             });
@@ -79,12 +99,40 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<Vec<ScalePoint>
     Ok(out)
 }
 
+/// The best time of `f` over at least `repeat` runs and as many more as fit in
+/// [`POINT_BUDGET_S`] (at most [`POINT_MAX_RUNS`]), and its last result.
+fn best_within<T>(repeat: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+    let start = Instant::now();
+    let (mut best, mut out) = best_of(1, &mut f);
+    let mut runs = 1;
+    while runs < repeat || (runs < POINT_MAX_RUNS && start.elapsed().as_secs_f64() < POINT_BUDGET_S) {
+        let (s, r) = best_of(1, &mut f);
+        (best, out, runs) = (best.min(s), r, runs + 1);
+    }
+    (best, out)
+}
+
+/// Seconds of builds a scaling point may take beyond `--repeat` ([`best_within`]).
+const POINT_BUDGET_S: f64 = 0.25;
+/// Most builds of one scaling point beyond `--repeat`.
+const POINT_MAX_RUNS: usize = 10;
+
 /// Least-squares slope of log(build ms) against log(N) for one structure on one family.
 pub fn slope(points: &[ScalePoint], scene: &str, structure: &str) -> Option<f64> {
+    slope_by(points, scene, structure, |p| p.triangles as f64)
+}
+
+/// Least-squares slope of log(build ms) against log(references): how linear a grid build is in
+/// its output.
+pub fn slope_in_refs(points: &[ScalePoint], scene: &str, structure: &str) -> Option<f64> {
+    slope_by(points, scene, structure, |p| p.refs as f64)
+}
+
+fn slope_by(points: &[ScalePoint], scene: &str, structure: &str, x: impl Fn(&ScalePoint) -> f64) -> Option<f64> {
     let p: Vec<(f64, f64)> = points
         .iter()
-        .filter(|p| p.scene == scene && p.structure == structure && p.build_ms > 0.0)
-        .map(|p| ((p.triangles as f64).ln(), p.build_ms.ln()))
+        .filter(|p| p.scene == scene && p.structure == structure && p.build_ms > 0.0 && x(p) > 0.0)
+        .map(|p| (x(p).ln(), p.build_ms.ln()))
         .collect();
     if p.len() < 2 {
         return None;
@@ -116,15 +164,19 @@ pub fn print(points: &[ScalePoint]) {
                 p.scene.to_string(),
                 p.structure.clone(),
                 p.triangles.to_string(),
+                if p.refs > 0 { p.refs.to_string() } else { "-".into() },
                 format!("{:.1}", p.build_ms),
                 format!("{:.0}", p.ns_per_triangle),
             ]
         })
         .collect();
-    print_table(&["scene", "structure", "triangles", "build ms", "ns/tri"], &rows);
+    print_table(&["scene", "structure", "triangles", "refs", "build ms", "ns/tri"], &rows);
     for (scene, s) in series(points) {
         if let Some(k) = slope(points, scene, &s) {
-            println!("  {scene}, {s}: log–log slope {k:.3} (1 = linear)");
+            match slope_in_refs(points, scene, &s) {
+                Some(r) => println!("  {scene}, {s}: log–log slope {k:.3} in N, {r:.3} in references (1 = linear)"),
+                None => println!("  {scene}, {s}: log–log slope {k:.3} (1 = linear)"),
+            }
         }
     }
 }

@@ -7,7 +7,7 @@
 
 use serde::Serialize;
 
-use super::scaling::{ScalePoint, slope};
+use super::scaling::{ScalePoint, slope, slope_in_refs};
 use super::{AutoPoint, Row};
 use crate::lab::report::print_table;
 use crate::lab::views::RaySet;
@@ -63,9 +63,16 @@ pub fn evaluate(rows: &[Row], auto: &[AutoPoint], scale: &[ScalePoint]) -> Vec<T
             push("best grid B/tri / obvhs BVH2 medium B/tri", scene, k, "≤ 1.0", k <= 1.0);
         }
     }
-    for (scene, label) in [("particles", "particles, scaled up"), ("mountain", "mountain, scaled up")] {
+    for (scene, label) in [
+        ("particles", "particles, scaled up"),
+        ("particles, size ∝ N^-1/3", "particles, size ∝ N^-1/3"),
+        ("mountain", "mountain, scaled up"),
+    ] {
         if let Some(k) = slope(scale, scene, "flat") {
             push("flat build: log–log slope of time against N", label, k, "≤ 1.05", k <= 1.05);
+        }
+        if let Some(k) = slope_in_refs(scale, scene, "flat") {
+            push("flat build: log–log slope of time against references", label, k, "(reported)", true);
         }
     }
     // Traversal, on every ray set: the best grid against the best BVH crate (`bvh`, obvhs);
