@@ -193,6 +193,11 @@ struct Measured {
 /// traces, and their ratios need more rounds than the traces' to settle.
 const BUILD_ROUNDS: usize = 9;
 
+/// Seconds of trace rounds a scene may take beyond `--repeat`: small scenes get more rounds
+/// (at most [`MAX_TRACE_ROUNDS`]), large ones `--repeat`.
+const TRACE_ROUND_BUDGET_S: f64 = 2.0;
+const MAX_TRACE_ROUNDS: usize = 8;
+
 /// Measures every subject on one scene, on every ray set; the grids that walk packets also in
 /// `--tile` packets on the camera sets (a row of their own, family "grid packets").
 fn bench_scene(
@@ -244,7 +249,13 @@ fn bench_scene(
     let mut packet_best = vec![vec![f64::INFINITY; sets.len()]; built.len()];
     let mut single_hits: Vec<Vec<Vec<Hit>>> = vec![Vec::new(); built.len()];
     let mut packet_hits: Vec<Vec<Option<Vec<Hit>>>> = vec![vec![None; sets.len()]; built.len()];
-    for round in 0..(args.repeat as usize).max(1) {
+    // Rounds beyond `--repeat` while they fit in TRACE_ROUND_BUDGET_S: a small scene's trace
+    // takes a few milliseconds, which one pause of the machine moves by 10–20%.
+    let traces_start = std::time::Instant::now();
+    let mut round = 0;
+    while round < (args.repeat as usize).max(1)
+        || (round < MAX_TRACE_ROUNDS && traces_start.elapsed().as_secs_f64() < TRACE_ROUND_BUDGET_S)
+    {
         for k in shuffled(built.len(), &mut rng) {
             let (subject, _, b) = &built[k];
             pb.set_message(format!("{} · {} (trace, round {})", sc.name, subject.name(), round + 1));
@@ -263,6 +274,7 @@ fn bench_scene(
                 }
             }
         }
+        round += 1;
     }
     for (k, (subject, build_s, built)) in built.into_iter().enumerate() {
         pb.set_message(format!("{} · {}", sc.name, subject.name()));
