@@ -128,18 +128,16 @@ impl GridRay {
         let tb = (res - o4) * inv4;
         let ordered = ta.cmple(tb);
         let (lo, hi) = (Vec3A::select(ordered, ta, tb), Vec3A::select(ordered, tb, ta));
+        // An axis the ray is parallel to bounds nothing (its slab test above is done).
+        let lo = Vec3A::select(parallel, Vec3A::NEG_INFINITY, lo);
+        let hi = Vec3A::select(parallel, Vec3A::INFINITY, hi);
+        // Axis by axis, a bound replaces t0 (t1) only when strictly inside: selects, not
+        // branches (a random ray's order of slab crossings is unpredictable).
         let mut t0 = tmin;
         let mut t1 = tmax;
         for a in 0..3 {
-            if parallel.test(a) {
-                continue;
-            }
-            if lo[a] > t0 {
-                t0 = lo[a];
-            }
-            if hi[a] < t1 {
-                t1 = hi[a];
-            }
+            t0 = if lo[a] > t0 { lo[a] } else { t0 };
+            t1 = if hi[a] < t1 { hi[a] } else { t1 };
         }
         if !t0.is_finite() || !t1.is_finite() || t0 > t1 {
             return None;

@@ -38,16 +38,17 @@ impl PreparedRay {
         {
             return None;
         }
-        let a = dir.abs();
         // Dominant axis; ties go to the lower axis (deterministic, same rule on the GPU).
-        let kz = argmax3(a.to_array());
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Keep the winding: swap when the dominant component is negative.
-        if dir[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let sz = 1.0 / dir[kz];
+        let kz = argmax3(dir.abs().to_array());
+        // The next two axes, swapped when the dominant component is negative (to keep the
+        // winding). Chosen by arithmetic, not branches: a random ray's axes are unpredictable,
+        // and a mispredicted branch costs more than this whole set-up.
+        const NEXT: [usize; 3] = [1, 2, 0];
+        let (d, o) = (dir.to_array(), org.to_array());
+        let (k1, k2) = (NEXT[kz % 3], NEXT[NEXT[kz % 3]]);
+        let swap = ((d[kz % 3] < 0.0) as usize).wrapping_neg() & (k1 ^ k2);
+        let (kx, ky) = (k1 ^ swap, k2 ^ swap);
+        let sz = 1.0 / d[kz % 3];
         Some(PreparedRay {
             org,
             dir,
@@ -56,10 +57,10 @@ impl PreparedRay {
             kx,
             ky,
             kz,
-            sx: dir[kx] * sz,
-            sy: dir[ky] * sz,
+            sx: d[kx % 3] * sz,
+            sy: d[ky % 3] * sz,
             sz,
-            org_k: [org[kx], org[ky], org[kz]],
+            org_k: [o[kx % 3], o[ky % 3], o[kz % 3]],
         })
     }
 }
@@ -68,11 +69,8 @@ impl PreparedRay {
 /// `argmax3` of shaders/shared/ray.wgsl.
 #[inline]
 pub fn argmax3<T: PartialOrd>(v: [T; 3]) -> usize {
-    if v[0] >= v[1] && v[0] >= v[2] {
-        0
-    } else if v[1] >= v[2] {
-        1
-    } else {
-        2
-    }
+    // `if x wins { 0 } else if y >= z { 1 } else { 2 }`, without branches (see `PreparedRay`).
+    let x_wins = (v[0] >= v[1]) & (v[0] >= v[2]);
+    let y_wins = (v[1] >= v[2]) as usize;
+    (!x_wins) as usize * (2 - y_wins)
 }

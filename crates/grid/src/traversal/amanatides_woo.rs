@@ -26,14 +26,11 @@ pub struct AmanatidesWoo {
 impl AmanatidesWoo {
     pub fn new(ray: &GridRay, res: UVec3) -> AmanatidesWoo {
         let cur = Cursor::start(ray, res);
-        let mut wall = Vec3::ZERO;
-        let mut t_max = Vec3::INFINITY;
-        for a in 0..3 {
-            if ray.d[a] != 0.0 {
-                wall[a] = cur.wall(a);
-                t_max[a] = (wall[a] - ray.o[a]) * ray.inv_d[a];
-            }
-        }
+        // On the axes the ray moves along, the next wall and its crossing; elsewhere 0 and
+        // never. Selected, not branched on: a random ray's direction signs are unpredictable.
+        let moving = ray.d.cmpne(Vec3::ZERO);
+        let wall = Vec3::select(moving, Vec3::from_array(std::array::from_fn(|a| cur.wall(a))), Vec3::ZERO);
+        let t_max = Vec3::select(moving, (wall - ray.o) * ray.inv_d, Vec3::INFINITY);
         AmanatidesWoo { cur, wall, o: ray.o, inv_d: ray.inv_d, t_max, t1: ray.t1 }
     }
 

@@ -189,13 +189,7 @@ impl Cursor {
 
 /// -1, 0 or 1 (0 for ±0 and NaN).
 fn sign_step(x: f32) -> i32 {
-    if x > 0.0 {
-        1
-    } else if x < 0.0 {
-        -1
-    } else {
-        0
-    }
+    (x > 0.0) as i32 - (x < 0.0) as i32
 }
 
 /// The exact walkers' `Iterator`: nothing once the cursor is done, else the walker's `advance`.
