@@ -163,10 +163,17 @@ impl FlatGrid {
     /// `ref_start`.
     #[inline]
     pub(crate) fn refs_of(&self, index: usize) -> &[u32] {
+        let j = self.rank(index);
+        &self.refs[self.ref_start[j] as usize..self.ref_start[j + 1] as usize]
+    }
+
+    /// The entry of occupied cell `index` in [`FlatGrid::ref_start`]: its word's rank plus the
+    /// occupied cells before it in the word.
+    #[inline]
+    pub(crate) fn rank(&self, index: usize) -> usize {
         let w = self.occupied[index / WORD_CELLS];
         let below = (1u32 << (index % WORD_CELLS)) - 1;
-        let j = (w.rank + (w.bits & below).count_ones()) as usize;
-        &self.refs[self.ref_start[j] as usize..self.ref_start[j + 1] as usize]
+        (w.rank + (w.bits & below).count_ones()) as usize
     }
 
     /// Whether the walk of `search` ends in cell `index`, which it leaves at `t_exit`: the

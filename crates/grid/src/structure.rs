@@ -15,7 +15,9 @@ use crate::multires::MultiresOptions;
 use crate::proximity::ProximityGrid;
 use crate::resolution::{self, CostModel, Resolution, ResolutionChoice};
 use crate::stats::{BatchStats, RayStats, StructureStats};
-use crate::trace::{TraceOptions, trace_batch, trace_flat};
+use crate::trace::interleaved::trace_flat_chunk;
+use crate::trace::{TraceOptions, trace_batch, trace_chunks, trace_flat};
+use crate::traversal::Traversal;
 use crate::twolevel::TwoLevelOptions;
 use crate::{BuildError, triangle_bounds_and_extents};
 
@@ -177,7 +179,15 @@ impl AnyGrid {
         opts: TraceOptions,
         parallel: bool,
     ) -> (Vec<Hit>, BatchStats) {
-        trace_batch(rays, parallel, |r| self.trace(tris, r, opts))
+        match self {
+            // Amanatides–Woo on the flat grid: incoherent rays on a large grid interleaved, so
+            // that the loads of an occupied cell's offset, references and triangles overlap
+            // across rays.
+            AnyGrid::Flat(g) if opts.traversal == Traversal::AmanatidesWoo => {
+                trace_chunks(rays, parallel, |r, h| trace_flat_chunk(g, tris, r, h, opts))
+            }
+            _ => trace_batch(rays, parallel, |r| self.trace(tris, r, opts)),
+        }
     }
 
     /// Closest hits (or any hits, by `opts.query`) of an image's rays (`rays` row-major, `width` per row) in packets of

@@ -72,7 +72,7 @@ impl<'a> ClosestHit<'a> {
         // The triangles' loads start together, not one test after another: random rays miss
         // the cache on most of them.
         for &tri in refs {
-            prefetch(self.tris, tri);
+            prefetch(self.tris, tri as usize);
         }
         // The triangles not mailboxed go through the f32 pre-filter eight at a time; only those
         // it cannot reject take the exact test, in the order of `refs`.
@@ -135,14 +135,15 @@ impl<'a> ClosestHit<'a> {
     }
 }
 
-/// Asks the CPU to start loading triangle `i` of `tris` into the cache (the line of its first
-/// corner). A hint only: it changes no result, and elsewhere than on x86-64 it does nothing.
+/// Asks the CPU to start loading element `i` of `items` into the cache (the line of its first
+/// byte: a triangle's first corner, a cell's offset or reference). A hint only: it changes no
+/// result, and elsewhere than on x86-64 it does nothing.
 #[inline(always)]
-fn prefetch(tris: &[[Vec3; 3]], i: u32) {
+pub(crate) fn prefetch<T>(items: &[T], i: usize) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let p = tris.as_ptr().wrapping_add(i as usize).cast::<i8>();
+        let p = items.as_ptr().wrapping_add(i).cast::<i8>();
         // SAFETY: a prefetch never faults and reads nothing the program sees, whatever the
         // address; SSE is part of the x86-64 baseline.
         #[allow(unsafe_code)]
@@ -151,7 +152,7 @@ fn prefetch(tris: &[[Vec3; 3]], i: u32) {
         };
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (tris, i);
+    let _ = (items, i);
 }
 
 /// The closest hit of `ray` among `tris` (the triangles the structure was built from), or any
@@ -164,17 +165,37 @@ pub fn closest_hit(
     opts: TraceOptions,
     walk: impl FnOnce(&mut ClosestHit),
 ) -> (Hit, RayStats) {
-    let Some(pr) = PreparedRay::new(ray) else {
+    let Some(mut search) = ClosestHit::start(tris, ray, opts) else {
         return (Hit::MISS, RayStats::default());
     };
-    let mut search = ClosestHit {
-        tris,
-        ray: pr,
-        best: Hit::MISS,
-        stats: RayStats::default(),
-        mailbox: opts.mailbox.then(Mailbox::default),
-        any: opts.query == Query::Any,
-    };
     walk(&mut search);
-    (search.best, search.stats)
+    search.result()
+}
+
+impl<'a> ClosestHit<'a> {
+    /// The search of `ray` before any cell, or `None` for a ray no triangle can be hit by (a
+    /// miss). [`closest_hit`] is `start`, the walk, then [`ClosestHit::result`].
+    #[inline(always)]
+    pub fn start(tris: &'a [[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> Option<ClosestHit<'a>> {
+        Some(ClosestHit {
+            tris,
+            ray: PreparedRay::new(ray)?,
+            best: Hit::MISS,
+            stats: RayStats::default(),
+            mailbox: opts.mailbox.then(Mailbox::default),
+            any: opts.query == Query::Any,
+        })
+    }
+
+    /// The best hit and the ray's stats.
+    #[inline(always)]
+    pub fn result(&self) -> (Hit, RayStats) {
+        (self.best, self.stats)
+    }
+
+    /// The triangles the structure was built from.
+    #[inline(always)]
+    pub fn triangles(&self) -> &'a [[Vec3; 3]] {
+        self.tris
+    }
 }

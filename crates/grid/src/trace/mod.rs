@@ -2,6 +2,7 @@
 //! walk, and batches of rays on all threads.
 
 pub mod closest_hit;
+pub mod interleaved;
 
 use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
@@ -50,16 +51,28 @@ pub fn trace_batch(
     parallel: bool,
     one: impl Fn(&Ray) -> (Hit, RayStats) + Sync,
 ) -> (Vec<Hit>, BatchStats) {
-    // Each chunk writes its hits in place (no per-chunk vectors copied into the result).
-    let run = |chunk: &[Ray], out: &mut [Hit]| {
-        let mut stats = BatchStats::default();
-        for (r, h) in chunk.iter().zip(out) {
-            let (hit, s) = one(r);
-            stats.add(s, hit.is_hit());
-            *h = hit;
-        }
-        stats
-    };
+    trace_chunks(rays, parallel, |chunk, out| trace_each(chunk, out, &one))
+}
+
+/// Traces `rays` one after another with `one`, writing `hits` in place; their stats summed.
+#[inline]
+pub fn trace_each(rays: &[Ray], hits: &mut [Hit], one: impl Fn(&Ray) -> (Hit, RayStats)) -> BatchStats {
+    let mut stats = BatchStats::default();
+    for (r, h) in rays.iter().zip(hits) {
+        let (hit, s) = one(r);
+        stats.add(s, hit.is_hit());
+        *h = hit;
+    }
+    stats
+}
+
+/// Traces a batch chunk by chunk: `run(rays, hits)` writes the hits of a chunk's rays in place
+/// and returns their stats (in parallel with the `parallel` feature and `parallel = true`).
+pub fn trace_chunks(
+    rays: &[Ray],
+    parallel: bool,
+    run: impl Fn(&[Ray], &mut [Hit]) -> BatchStats + Sync,
+) -> (Vec<Hit>, BatchStats) {
     let mut hits = vec![Hit::MISS; rays.len()];
     #[cfg(feature = "parallel")]
     if parallel {

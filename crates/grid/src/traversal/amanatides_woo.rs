@@ -7,7 +7,7 @@
 //! wall index, `t_max = (wall − o) · (1/d)`: no drift, same comparisons, and a form no shader
 //! compiler can contract into an FMA, so the WGSL port takes exactly the same steps.
 
-use glam::{UVec3, Vec3};
+use glam::{IVec3, UVec3, Vec3};
 
 use super::{CellStep, Cursor, argmin3};
 use crate::geometry::{GridRay, linear_index};
@@ -111,5 +111,88 @@ impl AmanatidesWoo {
                 _ => cross!(cz, wz, tz, z),
             }
         }
+    }
+
+    /// The walk as a [`LinearWalk`], which can be paused between cells.
+    #[inline]
+    pub fn linear(self) -> LinearWalk {
+        let Cursor { cell, res, step, done } = self.cur;
+        LinearWalk {
+            addr: linear_index(cell.as_uvec3(), res.as_uvec3()) as isize,
+            stride: [step.x as isize, (step.y * res.x) as isize, (step.z * res.x * res.y) as isize],
+            cell,
+            res,
+            step,
+            wall: self.wall,
+            t_max: self.t_max,
+            o: self.o,
+            inv_d: self.inv_d,
+            t1: self.t1,
+            done,
+        }
+    }
+}
+
+/// Amanatides–Woo with the cell's address `x + res.x · (y + res.y · z)` kept incrementally: one
+/// cell per [`LinearWalk::next_cell`], so a walk can be paused between cells (the interleaved
+/// batch, [`crate::trace::interleaved`]) or run in one loop ([`AmanatidesWoo::walk_linear`]).
+#[derive(Clone, Copy, Debug)]
+pub struct LinearWalk {
+    addr: isize,
+    stride: [isize; 3],
+    cell: IVec3,
+    res: IVec3,
+    step: IVec3,
+    wall: Vec3,
+    t_max: Vec3,
+    o: Vec3,
+    inv_d: Vec3,
+    t1: f32,
+    done: bool,
+}
+
+impl LinearWalk {
+    /// The current cell, its address and the `t` where the ray leaves it (capped at the
+    /// segment's end); then the walk moves on to the next cell, or ends when the segment ends in
+    /// this one or the next leaves the grid. `None` once the walk has ended.
+    #[inline(always)]
+    pub fn next_cell(&mut self) -> Option<(UVec3, usize, f32)> {
+        if self.done {
+            return None;
+        }
+        let (tx, ty, tz) = (self.t_max.x, self.t_max.y, self.t_max.z);
+        // argmin3's tie rule: x before y before z.
+        let (a, t) = if tx <= ty && tx <= tz {
+            (0, tx)
+        } else if ty <= tz {
+            (1, ty)
+        } else {
+            (2, tz)
+        };
+        let out = (self.cell.as_uvec3(), self.addr as usize, t.min(self.t1));
+        if t.is_nan() || t > self.t1 {
+            self.done = true;
+            return Some(out);
+        }
+        self.addr += self.stride[a];
+        // One cell along the axis: the walk ends when that leaves the grid, else the axis'
+        // next wall crossing. A constant axis per arm keeps the state in registers.
+        macro_rules! cross {
+            ($axis:ident) => {{
+                self.cell.$axis += self.step.$axis;
+                if self.cell.$axis < 0 || self.cell.$axis >= self.res.$axis {
+                    self.done = true;
+                } else {
+                    self.wall.$axis += self.step.$axis as f32;
+                    self.t_max.$axis = (self.wall.$axis - self.o.$axis) * self.inv_d.$axis;
+                }
+            }};
+        }
+        match a {
+            0 => cross!(x),
+            1 => cross!(y),
+            _ => cross!(z),
+        }
+        Some(out)
     }
 }
