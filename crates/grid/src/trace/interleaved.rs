@@ -17,8 +17,8 @@
 use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
 
-use super::{TraceOptions, trace_each, trace_flat};
 use super::closest_hit::{ClosestHit, prefetch};
+use super::{TraceOptions, trace_each, trace_flat};
 use crate::flat::{FlatGrid, WORD_CELLS};
 use crate::stats::{BatchStats, RayStats};
 use crate::traversal::amanatides_woo::{AmanatidesWoo, LinearWalk};
