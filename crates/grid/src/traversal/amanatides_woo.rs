@@ -63,52 +63,22 @@ impl AmanatidesWoo {
 
     /// The same walk as the iterator, fused into one loop: `visit(cell, address, t_exit)`
     /// (address `x + res.x · (y + res.y · z)`, kept incrementally) returns true to stop, and
-    /// then so does this. Every piece of state is a local, one per axis, so the loop runs in
-    /// registers; the cells, their order and their exits are the iterator's.
+    /// then so does this. The state is a [`LinearWalk`], a local, so the loop runs in registers
+    /// (its steps without the pausable walk's end flag); the cells, their order and their exits
+    /// are the iterator's.
     #[inline]
     pub(super) fn walk_linear(self, mut visit: impl FnMut(UVec3, usize, f32) -> bool) -> bool {
-        let Cursor { cell, res, step, done } = self.cur;
-        if done {
+        let mut w = self.linear();
+        if w.done {
             return false;
         }
-        let (o, inv, t1) = (self.o, self.inv_d, self.t1);
-        let stride = [step.x as isize, (step.y * res.x) as isize, (step.z * res.x * res.y) as isize];
-        let mut addr = linear_index(cell.as_uvec3(), res.as_uvec3()) as isize;
-        let (mut cx, mut cy, mut cz) = (cell.x, cell.y, cell.z);
-        let (mut wx, mut wy, mut wz) = (self.wall.x, self.wall.y, self.wall.z);
-        let (mut tx, mut ty, mut tz) = (self.t_max.x, self.t_max.y, self.t_max.z);
         loop {
-            // argmin3's tie rule: x before y before z.
-            let (a, t) = if tx <= ty && tx <= tz {
-                (0, tx)
-            } else if ty <= tz {
-                (1, ty)
-            } else {
-                (2, tz)
-            };
-            if visit(UVec3::new(cx as u32, cy as u32, cz as u32), addr as usize, t.min(t1)) {
+            let (a, t) = w.next_axis();
+            if visit(w.cell.as_uvec3(), w.addr as usize, t.min(w.t1)) {
                 return true;
             }
-            if t.is_nan() || t > t1 {
+            if w.ends_at(t) || !w.cross(a) {
                 return false;
-            }
-            addr += stride[a];
-            // One cell along the axis: leave when the walk leaves the grid, else the axis'
-            // next wall crossing.
-            macro_rules! cross {
-                ($c:ident, $w:ident, $t:ident, $axis:ident) => {{
-                    $c += step.$axis;
-                    if $c < 0 || $c >= res.$axis {
-                        return false;
-                    }
-                    $w += step.$axis as f32;
-                    $t = ($w - o.$axis) * inv.$axis;
-                }};
-            }
-            match a {
-                0 => cross!(cx, wx, tx, x),
-                1 => cross!(cy, wy, ty, y),
-                _ => cross!(cz, wz, tz, z),
             }
         }
     }
@@ -152,6 +122,48 @@ pub struct LinearWalk {
 }
 
 impl LinearWalk {
+    /// The axis of the next crossing and its `t` (argmin3's tie rule: x before y before z).
+    #[inline(always)]
+    fn next_axis(&self) -> (usize, f32) {
+        let (tx, ty, tz) = (self.t_max.x, self.t_max.y, self.t_max.z);
+        if tx <= ty && tx <= tz {
+            (0, tx)
+        } else if ty <= tz {
+            (1, ty)
+        } else {
+            (2, tz)
+        }
+    }
+
+    /// Whether the segment ends in the current cell, whose exit is `t`.
+    #[inline(always)]
+    fn ends_at(&self, t: f32) -> bool {
+        t.is_nan() || t > self.t1
+    }
+
+    /// One cell along axis `a`: false when that leaves the grid, else the axis' next wall
+    /// crossing is updated. A constant axis per arm keeps the state in registers.
+    #[inline(always)]
+    fn cross(&mut self, a: usize) -> bool {
+        self.addr += self.stride[a];
+        macro_rules! cross {
+            ($axis:ident) => {{
+                self.cell.$axis += self.step.$axis;
+                if self.cell.$axis < 0 || self.cell.$axis >= self.res.$axis {
+                    return false;
+                }
+                self.wall.$axis += self.step.$axis as f32;
+                self.t_max.$axis = (self.wall.$axis - self.o.$axis) * self.inv_d.$axis;
+            }};
+        }
+        match a {
+            0 => cross!(x),
+            1 => cross!(y),
+            _ => cross!(z),
+        }
+        true
+    }
+
     /// The current cell, its address and the `t` where the ray leaves it (capped at the
     /// segment's end); then the walk moves on to the next cell, or ends when the segment ends in
     /// this one or the next leaves the grid. `None` once the walk has ended.
@@ -160,39 +172,9 @@ impl LinearWalk {
         if self.done {
             return None;
         }
-        let (tx, ty, tz) = (self.t_max.x, self.t_max.y, self.t_max.z);
-        // argmin3's tie rule: x before y before z.
-        let (a, t) = if tx <= ty && tx <= tz {
-            (0, tx)
-        } else if ty <= tz {
-            (1, ty)
-        } else {
-            (2, tz)
-        };
+        let (a, t) = self.next_axis();
         let out = (self.cell.as_uvec3(), self.addr as usize, t.min(self.t1));
-        if t.is_nan() || t > self.t1 {
-            self.done = true;
-            return Some(out);
-        }
-        self.addr += self.stride[a];
-        // One cell along the axis: the walk ends when that leaves the grid, else the axis'
-        // next wall crossing. A constant axis per arm keeps the state in registers.
-        macro_rules! cross {
-            ($axis:ident) => {{
-                self.cell.$axis += self.step.$axis;
-                if self.cell.$axis < 0 || self.cell.$axis >= self.res.$axis {
-                    self.done = true;
-                } else {
-                    self.wall.$axis += self.step.$axis as f32;
-                    self.t_max.$axis = (self.wall.$axis - self.o.$axis) * self.inv_d.$axis;
-                }
-            }};
-        }
-        match a {
-            0 => cross!(x),
-            1 => cross!(y),
-            _ => cross!(z),
-        }
+        self.done = self.ends_at(t) || !self.cross(a);
         Some(out)
     }
 }
