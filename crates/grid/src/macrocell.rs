@@ -119,9 +119,7 @@ impl MacrocellGrid {
         let traversal = opts.traversal;
         closest_hit(tris, ray, opts, |search| {
             let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
-            let a = self.a as f32;
-            // Exact: A is a power of two.
-            let macro_ray = GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..fine_ray };
+            let macro_ray = self.macro_ray(&fine_ray);
             let mut t_enter = fine_ray.t0;
             let (_, cells) = walk_counted(traversal, &macro_ray, self.macro_res, |m, maddr, m_exit| {
                 // An occupied macrocell's fine walk is a call, keeping the macro walk's loop
@@ -136,6 +134,21 @@ impl MacrocellGrid {
         })
     }
 
+    /// The fine grid's ray `fine_ray` in the macro grid's space (exact: A is a power of two).
+    #[inline]
+    pub fn macro_ray(&self, fine_ray: &GridRay) -> GridRay {
+        let a = self.a as f32;
+        GridRay { o: fine_ray.o / a, d: fine_ray.d / a, inv_d: fine_ray.inv_d * a, ..*fine_ray }
+    }
+
+    /// Macrocell `m`'s first fine cell, and `fine_ray` over `[t0, t1]` in the space of its block
+    /// of A³ fine cells.
+    #[inline]
+    pub fn block_ray(&self, m: UVec3, fine_ray: &GridRay, t0: f32, t1: f32) -> (UVec3, GridRay) {
+        let lo = m * self.a;
+        (lo, GridRay { o: fine_ray.o - lo.as_vec3(), t0, t1, ..*fine_ray })
+    }
+
     /// Walks the fine cells of macrocell `m` along `fine_ray` over `[t0, t1]`; true when the
     /// search is done.
     #[inline(never)]
@@ -148,8 +161,7 @@ impl MacrocellGrid {
         traversal: Traversal,
         search: &mut ClosestHit,
     ) -> bool {
-        let lo = m * self.a;
-        let sub = GridRay { o: fine_ray.o - lo.as_vec3(), t0, t1, ..*fine_ray };
+        let (lo, sub) = self.block_ray(m, fine_ray, t0, t1);
         let fine = &self.fine;
         let (done, cells) = walk_counted(traversal, &sub, UVec3::splat(self.a), |c, _, t_exit| {
             fine.visit(search, fine.geom.cell_index(lo + c), t_exit)

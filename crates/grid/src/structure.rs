@@ -15,7 +15,7 @@ use crate::multires::MultiresOptions;
 use crate::proximity::ProximityGrid;
 use crate::resolution::{self, CostModel, Resolution, ResolutionChoice};
 use crate::stats::{BatchStats, RayStats, StructureStats};
-use crate::trace::interleaved::trace_flat_chunk;
+use crate::trace::interleaved;
 use crate::trace::{TraceOptions, trace_batch, trace_chunks, trace_flat};
 use crate::traversal::Traversal;
 use crate::twolevel::TwoLevelOptions;
@@ -180,11 +180,14 @@ impl AnyGrid {
         parallel: bool,
     ) -> (Vec<Hit>, BatchStats) {
         match self {
-            // Amanatides–Woo on the flat grid: incoherent rays on a large grid interleaved, so
-            // that the loads of an occupied cell's offset, references and triangles overlap
-            // across rays.
+            // Amanatides–Woo on the flat and macrocell grids: incoherent rays on a large grid
+            // interleaved, so that the loads of an occupied cell's offset, references and
+            // triangles overlap across rays.
             AnyGrid::Flat(g) if opts.traversal == Traversal::AmanatidesWoo => {
-                trace_chunks(rays, parallel, |r, h| trace_flat_chunk(g, tris, r, h, opts))
+                trace_chunks(rays, parallel, |r, h| interleaved::trace_flat_chunk(g, tris, r, h, opts))
+            }
+            AnyGrid::Macrocell(g) if opts.traversal == Traversal::AmanatidesWoo => {
+                trace_chunks(rays, parallel, |r, h| interleaved::trace_macrocell_chunk(g, tris, r, h, opts))
             }
             _ => trace_batch(rays, parallel, |r| self.trace(tris, r, opts)),
         }

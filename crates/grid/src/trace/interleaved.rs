@@ -14,12 +14,14 @@
 //! [`crate::traversal::walk`]), the same [`ClosestHit`] tests and stopping rule, so the hits
 //! and the stats are the same bit for bit.
 
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 use gridrt_scene::{Hit, Ray};
 
 use super::closest_hit::{ClosestHit, prefetch};
 use super::{TraceOptions, trace_each, trace_flat};
-use crate::flat::{FlatGrid, WORD_CELLS};
+use crate::flat::FlatGrid;
+use crate::geometry::GridRay;
+use crate::macrocell::MacrocellGrid;
 use crate::stats::{BatchStats, RayStats};
 use crate::traversal::amanatides_woo::{AmanatidesWoo, LinearWalk};
 
@@ -53,9 +55,15 @@ pub fn incoherent(rays: &[Ray]) -> bool {
     2 * close < n
 }
 
+/// Whether a chunk of `rays` through a structure of `bytes` (with its triangles) walks
+/// interleaved: when the arrays outgrow the cache ([`INTERLEAVE_MIN_BYTES`]) and the rays are
+/// [`incoherent`]. The hits and stats are the same either way.
+pub fn pays(bytes: u64, rays: &[Ray]) -> bool {
+    bytes > INTERLEAVE_MIN_BYTES && incoherent(rays)
+}
+
 /// Closest hits (or any hits) of a chunk of `rays` in `grid`, written to `hits`: interleaved
-/// when the grid and triangles outgrow the cache ([`INTERLEAVE_MIN_BYTES`]) and the rays are
-/// [`incoherent`], else ray by ray. The same hits and stats either way.
+/// when it [`pays`], else ray by ray.
 pub fn trace_flat_chunk(
     grid: &FlatGrid,
     tris: &[[Vec3; 3]],
@@ -63,11 +71,25 @@ pub fn trace_flat_chunk(
     hits: &mut [Hit],
     opts: TraceOptions,
 ) -> BatchStats {
-    let bytes = grid.memory_bytes() + size_of_val(tris) as u64;
-    if bytes > INTERLEAVE_MIN_BYTES && incoherent(rays) {
+    if pays(grid.memory_bytes() + size_of_val(tris) as u64, rays) {
         trace_flat_interleaved(grid, tris, rays, hits, opts)
     } else {
         trace_each(rays, hits, |r| trace_flat(grid, tris, r, opts))
+    }
+}
+
+/// [`trace_flat_chunk`] for the macrocell grid (its single-ray walk: [`MacrocellGrid::trace`]).
+pub fn trace_macrocell_chunk(
+    grid: &MacrocellGrid,
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    hits: &mut [Hit],
+    opts: TraceOptions,
+) -> BatchStats {
+    if pays(grid.memory_bytes() + size_of_val(tris) as u64, rays) {
+        trace_macrocell_interleaved(grid, tris, rays, hits, opts)
+    } else {
+        trace_each(rays, hits, |r| grid.trace(tris, r, opts))
     }
 }
 
@@ -84,63 +106,163 @@ enum Stage {
     Test { start: usize, end: usize, t_exit: f32 },
 }
 
+/// A structure's walk to its next occupied cell of a flat grid (the flat grid's own cells, or a
+/// macrocell grid's fine cells inside its occupied macrocells), paused there.
+pub trait CellWalk {
+    /// The flat grid whose cells the walk visits.
+    fn cells(&self) -> &FlatGrid;
+    /// Walks on to the next occupied cell: its index and the `t` where the ray leaves it, or
+    /// `None` when the walk ended or `search` is done in an empty cell. Every visited cell is
+    /// counted in `cells`, as the single-ray walk counts it.
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)>;
+}
+
+/// The cells of `walk` in `grid` up to the next occupied one (see [`CellWalk::next_occupied`]):
+/// `at(cell)` is a cell's index in `grid`.
+#[inline(always)]
+fn next_occupied_of(
+    walk: &mut LinearWalk,
+    grid: &FlatGrid,
+    at: impl Fn(UVec3, usize) -> usize,
+    search: &ClosestHit,
+    cells: &mut u32,
+) -> Option<Option<(usize, f32)>> {
+    while let Some((cell, addr, t_exit)) = walk.next_cell() {
+        *cells += 1;
+        let index = at(cell, addr);
+        if grid.is_occupied(index) {
+            return Some(Some((index, t_exit)));
+        }
+        if search.done_at(t_exit) {
+            return Some(None);
+        }
+    }
+    // The walk ended.
+    None
+}
+
+/// The flat grid's walk ([`super::trace_flat`]'s).
+#[derive(Debug)]
+pub struct FlatWalk<'g> {
+    grid: &'g FlatGrid,
+    walk: LinearWalk,
+}
+
+impl<'g> FlatWalk<'g> {
+    /// The walk of `search`'s ray through `grid`, or `None` when the ray misses the grid.
+    pub fn new(grid: &'g FlatGrid, search: &ClosestHit) -> Option<FlatWalk<'g>> {
+        let gr = grid.geom.clip(&search.ray)?;
+        Some(FlatWalk { grid, walk: AmanatidesWoo::new(&gr, grid.geom.res).linear() })
+    }
+}
+
+impl CellWalk for FlatWalk<'_> {
+    fn cells(&self) -> &FlatGrid {
+        self.grid
+    }
+
+    #[inline]
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
+        next_occupied_of(&mut self.walk, self.grid, |_, addr| addr, search, cells).flatten()
+    }
+}
+
+/// The macrocell grid's walk ([`MacrocellGrid::trace`]'s): the macro walk, and in each
+/// occupied macrocell the walk of its block of fine cells.
+#[derive(Debug)]
+pub struct MacrocellWalk<'g> {
+    grid: &'g MacrocellGrid,
+    /// The ray in the fine grid's space (each block's walk starts from it).
+    fine_ray: GridRay,
+    macro_walk: LinearWalk,
+    /// Where the ray entered the current macrocell.
+    t_enter: f32,
+    /// The block being walked: its first fine cell, its walk and the macrocell's exit.
+    block: Option<(UVec3, LinearWalk, f32)>,
+}
+
+impl<'g> MacrocellWalk<'g> {
+    /// The walk of `search`'s ray through `grid`, or `None` when the ray misses the grid.
+    pub fn new(grid: &'g MacrocellGrid, search: &ClosestHit) -> Option<MacrocellWalk<'g>> {
+        let fine_ray = grid.fine.geom.clip(&search.ray)?;
+        let macro_walk = AmanatidesWoo::new(&grid.macro_ray(&fine_ray), grid.macro_res).linear();
+        Some(MacrocellWalk { grid, fine_ray, macro_walk, t_enter: fine_ray.t0, block: None })
+    }
+}
+
+impl CellWalk for MacrocellWalk<'_> {
+    fn cells(&self) -> &FlatGrid {
+        &self.grid.fine
+    }
+
+    #[inline]
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
+        let fine = &self.grid.fine;
+        loop {
+            if let Some((lo, walk, m_exit)) = &mut self.block {
+                let lo = *lo;
+                match next_occupied_of(walk, fine, |c, _| fine.geom.cell_index(lo + c), search, cells) {
+                    Some(found) => return found,
+                    // The block's cells are walked: the macrocell's end, as after its block walk.
+                    None => {
+                        let m_exit = *m_exit;
+                        self.block = None;
+                        if search.done_at(m_exit) {
+                            return None;
+                        }
+                    }
+                }
+            }
+            let (m, addr, m_exit) = self.macro_walk.next_cell()?;
+            *cells += 1;
+            let entered = std::mem::replace(&mut self.t_enter, m_exit);
+            if self.grid.occupied_at(addr) {
+                let (lo, sub) = self.grid.block_ray(m, &self.fine_ray, entered, m_exit);
+                self.block = Some((lo, AmanatidesWoo::new(&sub, UVec3::splat(self.grid.a)).linear(), m_exit));
+            } else if search.done_at(m_exit) {
+                return None;
+            }
+        }
+    }
+}
+
 /// One ray in flight.
-struct Slot<'a> {
+struct Slot<'a, W> {
     /// Its index in the batch.
     ray: usize,
     search: ClosestHit<'a>,
-    walk: LinearWalk,
+    walk: W,
     cells: u32,
     stage: Stage,
 }
 
-/// The search of `ray` (index `i`) ready to walk `grid`, or its result when there is nothing to
-/// walk (a ray no triangle can be hit by, or one that misses the grid).
-fn start<'a>(
-    grid: &FlatGrid,
-    tris: &'a [[Vec3; 3]],
-    ray: &Ray,
-    i: usize,
-    opts: TraceOptions,
-) -> Result<Slot<'a>, (Hit, RayStats)> {
-    let Some(search) = ClosestHit::start(tris, ray, opts) else { return Err((Hit::MISS, RayStats::default())) };
-    let Some(gr) = grid.geom.clip(&search.ray) else { return Err(search.result()) };
-    let walk = AmanatidesWoo::new(&gr, grid.geom.res).linear();
-    Ok(Slot { ray: i, search, walk, cells: 0, stage: Stage::Walk })
-}
-
-impl Slot<'_> {
+impl<W: CellWalk> Slot<'_, W> {
     /// One turn: the ray's next stage. Its result when the search is done.
     #[inline]
-    fn turn(&mut self, grid: &FlatGrid) -> Option<(Hit, RayStats)> {
+    fn turn(&mut self) -> Option<(Hit, RayStats)> {
         match self.stage {
-            Stage::Walk => loop {
-                let Some((_, index, t_exit)) = self.walk.next_cell() else { return Some(self.finish()) };
-                self.cells += 1;
-                if (grid.occupied[index / WORD_CELLS].bits >> (index % WORD_CELLS)) & 1 == 0 {
-                    if self.search.done_at(t_exit) {
-                        return Some(self.finish());
-                    }
-                    continue;
-                }
-                let entry = grid.rank(index);
-                prefetch(&grid.ref_start, entry);
+            Stage::Walk => {
+                let Some((index, t_exit)) = self.walk.next_occupied(&self.search, &mut self.cells) else {
+                    return Some(self.finish());
+                };
+                let entry = self.walk.cells().rank(index);
+                prefetch(&self.walk.cells().ref_start, entry);
                 self.stage = Stage::Offset { entry, t_exit };
-                return None;
-            },
+            }
             Stage::Offset { entry, t_exit } => {
+                let grid = self.walk.cells();
                 let (start, end) = (grid.ref_start[entry] as usize, grid.ref_start[entry + 1] as usize);
                 prefetch(&grid.refs, start);
                 self.stage = Stage::Refs { start, end, t_exit };
             }
             Stage::Refs { start, end, t_exit } => {
-                for &tri in &grid.refs[start..end] {
+                for &tri in &self.walk.cells().refs[start..end] {
                     prefetch(self.search.triangles(), tri as usize);
                 }
                 self.stage = Stage::Test { start, end, t_exit };
             }
             Stage::Test { start, end, t_exit } => {
-                if self.search.test_cell(&grid.refs[start..end], t_exit) {
+                if self.search.test_cell(&self.walk.cells().refs[start..end], t_exit) {
                     return Some(self.finish());
                 }
                 self.stage = Stage::Walk;
@@ -155,6 +277,52 @@ impl Slot<'_> {
     }
 }
 
+/// Closest hits (or any hits, by `opts.query`) of `rays` over `tris`, written to `hits` (as
+/// long as `rays`), [`SLOTS`] rays walking at once, each along the walk `walk` gives its search
+/// (`None`: the ray misses the structure); the rays' stats summed.
+pub fn trace_interleaved<W: CellWalk>(
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    hits: &mut [Hit],
+    opts: TraceOptions,
+    walk: impl Fn(&ClosestHit) -> Option<W>,
+) -> BatchStats {
+    assert_eq!(rays.len(), hits.len(), "one hit per ray");
+    let mut stats = BatchStats::default();
+    let mut slots: [Option<Slot<W>>; SLOTS] = std::array::from_fn(|_| None);
+    let mut next = 0;
+    loop {
+        let mut walking = false;
+        for slot in &mut slots {
+            // An empty slot takes the next rays until one has cells to walk.
+            while slot.is_none() && next < rays.len() {
+                let search = ClosestHit::start(tris, &rays[next], opts);
+                match search.map(|s| (walk(&s), s)) {
+                    Some((Some(w), search)) => {
+                        *slot = Some(Slot { ray: next, search, walk: w, cells: 0, stage: Stage::Walk });
+                    }
+                    unwalked => {
+                        let (hit, s) = unwalked.map_or((Hit::MISS, RayStats::default()), |(_, s)| s.result());
+                        hits[next] = hit;
+                        stats.add(s, hit.is_hit());
+                    }
+                }
+                next += 1;
+            }
+            let Some(s) = slot else { continue };
+            walking = true;
+            if let Some((hit, rs)) = s.turn() {
+                hits[s.ray] = hit;
+                stats.add(rs, hit.is_hit());
+                *slot = None;
+            }
+        }
+        if !walking {
+            return stats;
+        }
+    }
+}
+
 /// Closest hits (or any hits, by `opts.query`) of `rays` in `grid` over `tris`, written to
 /// `hits` (as long as `rays`), [`SLOTS`] rays walking at once; the rays' stats summed. The
 /// hits and stats of [`trace_flat`](super::trace_flat) ray by ray (Amanatides–Woo).
@@ -165,34 +333,16 @@ pub fn trace_flat_interleaved(
     hits: &mut [Hit],
     opts: TraceOptions,
 ) -> BatchStats {
-    assert_eq!(rays.len(), hits.len(), "one hit per ray");
-    let mut stats = BatchStats::default();
-    let mut slots: [Option<Slot>; SLOTS] = std::array::from_fn(|_| None);
-    let mut next = 0;
-    loop {
-        let mut walking = false;
-        for slot in &mut slots {
-            // An empty slot takes the next rays until one has cells to walk.
-            while slot.is_none() && next < rays.len() {
-                match start(grid, tris, &rays[next], next, opts) {
-                    Ok(s) => *slot = Some(s),
-                    Err((hit, s)) => {
-                        hits[next] = hit;
-                        stats.add(s, hit.is_hit());
-                    }
-                }
-                next += 1;
-            }
-            let Some(s) = slot else { continue };
-            walking = true;
-            if let Some((hit, rs)) = s.turn(grid) {
-                hits[s.ray] = hit;
-                stats.add(rs, hit.is_hit());
-                *slot = None;
-            }
-        }
-        if !walking {
-            return stats;
-        }
-    }
+    trace_interleaved(tris, rays, hits, opts, |search| FlatWalk::new(grid, search))
+}
+
+/// [`trace_flat_interleaved`] for the macrocell grid ([`MacrocellGrid::trace`] ray by ray).
+pub fn trace_macrocell_interleaved(
+    grid: &MacrocellGrid,
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    hits: &mut [Hit],
+    opts: TraceOptions,
+) -> BatchStats {
+    trace_interleaved(tris, rays, hits, opts, |search| MacrocellWalk::new(grid, search))
 }

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{BuildOptions, GridConfig, GridKind, InsertMode, Query, Resolution, Traversal, structure};
+use gridrt_grid::{AnyGrid, BuildOptions, GridConfig, GridKind, InsertMode, Query, Resolution, Traversal, structure};
 use gridrt_scene::Ray;
 use gridrt_scene::gltf_load::load_path;
 use gridrt_scene::rays::inside_rays;
@@ -175,12 +175,12 @@ fn rays_from_inside_closed_meshes_never_escape() {
 
 #[test]
 fn interleaved_walks_equal_single_rays_and_brute_force() {
-    // The interleaved path runs by itself (whatever the grid's size and the rays' coherence):
-    // hits and stats equal the single-ray walk's on every ray, for both queries and insertions,
-    // with and without the mailbox, and on batches shorter than the slots (rays in flight end in
-    // every order: misses of the grid, rays no triangle can be hit by, clipped segments).
-    use gridrt_grid::trace::interleaved::{SLOTS, trace_flat_interleaved};
-    use gridrt_grid::trace::trace_flat;
+    // The interleaved paths run by themselves (whatever the grid's size and the rays'
+    // coherence): hits and stats equal the single-ray walks' on every ray, for the flat and the
+    // macrocell grid, both queries and insertions, with and without the mailbox, and on batches
+    // shorter than the slots (rays in flight end in every order: misses of the grid, rays no
+    // triangle can be hit by, clipped segments).
+    use gridrt_grid::trace::interleaved::{SLOTS, trace_flat_interleaved, trace_macrocell_interleaved};
     let mut scenes = procedural_scenes();
     scenes.push((
         "particles, 100k".into(),
@@ -193,35 +193,37 @@ fn interleaved_walks_equal_single_rays_and_brute_force() {
         rays.push(Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, f32::INFINITY));
         rays.push(Ray::new(Vec3::splat(f32::NAN), Vec3::X, 0.0, 1.0));
         let (expected, _) = reference(&tris, &rays);
-        for insert in InsertMode::ALL {
-            let cfg = GridConfig {
-                kind: GridKind::Flat,
-                build: BuildOptions { insert, parallel: true },
-                ..GridConfig::default()
-            };
-            let (grid, _) = structure::build(&tris, &cfg).unwrap();
-            let flat = grid.flat().unwrap();
-            for query in [Query::Closest, Query::Any] {
-                for mailbox in [false, true] {
-                    let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox, query };
-                    let what = format!("{name} {insert:?} {query:?} mailbox={mailbox}");
-                    let (single, per_ray): (Vec<_>, Vec<_>) =
-                        rays.iter().map(|r| trace_flat(flat, &tris, r, opts)).unzip();
-                    for len in [rays.len(), SLOTS - 3, 1] {
-                        let mut hits = vec![gridrt_scene::Hit::MISS; len];
-                        let stats = trace_flat_interleaved(flat, &tris, &rays[..len], &mut hits, opts);
-                        let mut want = gridrt_grid::BatchStats::default();
-                        for (s, h) in per_ray[..len].iter().zip(&single[..len]) {
-                            want.add(*s, h.is_hit());
+        for kind in [GridKind::Flat, GridKind::Macrocell] {
+            for insert in InsertMode::ALL {
+                let cfg = GridConfig { kind, build: BuildOptions { insert, parallel: true }, ..GridConfig::default() };
+                let (grid, _) = structure::build(&tris, &cfg).unwrap();
+                for query in [Query::Closest, Query::Any] {
+                    for mailbox in [false, true] {
+                        let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox, query };
+                        let what = format!("{name} {kind} {insert:?} {query:?} mailbox={mailbox}");
+                        let (single, per_ray): (Vec<_>, Vec<_>) =
+                            rays.iter().map(|r| grid.trace(&tris, r, opts)).unzip();
+                        for len in [rays.len(), SLOTS - 3, 1] {
+                            let mut hits = vec![gridrt_scene::Hit::MISS; len];
+                            let (rs, hs) = (&rays[..len], &mut hits[..]);
+                            let stats = match &grid {
+                                AnyGrid::Flat(f) => trace_flat_interleaved(f, &tris, rs, hs, opts),
+                                AnyGrid::Macrocell(m) => trace_macrocell_interleaved(m, &tris, rs, hs, opts),
+                                _ => unreachable!(),
+                            };
+                            let mut want = gridrt_grid::BatchStats::default();
+                            for (s, h) in per_ray[..len].iter().zip(&single[..len]) {
+                                want.add(*s, h.is_hit());
+                            }
+                            assert_eq!(stats, want, "{what}, {len} rays: stats");
+                            assert!(
+                                hits.iter().zip(&single).all(|(a, b)| a.same_bits(b)),
+                                "{what}, {len} rays: interleaved hits differ from single rays"
+                            );
                         }
-                        assert_eq!(stats, want, "{what}, {len} rays: stats");
-                        assert!(
-                            hits.iter().zip(&single).all(|(a, b)| a.same_bits(b)),
-                            "{what}, {len} rays: interleaved hits differ from single rays"
-                        );
-                    }
-                    if query == Query::Closest {
-                        assert_same_hits(&what, &rays, &expected, &single);
+                        if query == Query::Closest {
+                            assert_same_hits(&what, &rays, &expected, &single);
+                        }
                     }
                 }
             }
