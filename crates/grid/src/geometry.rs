@@ -155,14 +155,15 @@ impl GridRay {
     /// clamps its cells into the sub-grid instead.
     #[inline]
     pub fn child(&self, c: UVec3, sub_res: UVec3, t0: f32, t1: f32) -> GridRay {
-        let s = sub_res.as_vec3();
-        let mut d = self.d * s;
-        for a in 0..3 {
-            if !(1.0 / d[a]).is_finite() {
-                d[a] = 0.0;
-            }
-        }
-        GridRay { o: (self.o - c.as_vec3()) * s, d, inv_d: Vec3::ONE / d, t0, t1 }
+        let s = Vec3A::from(sub_res.as_vec3());
+        let d = Vec3A::from(self.d) * s;
+        // A component whose reciprocal overflows (or is NaN) moves the ray along nothing: it
+        // becomes 0, and its reciprocal 1 / +0 = +inf. One vector division, no branches.
+        let inv = Vec3A::ONE / d;
+        let parallel = !inv.is_finite_mask();
+        let (d, inv_d) = (Vec3A::select(parallel, Vec3A::ZERO, d), Vec3A::select(parallel, Vec3A::INFINITY, inv));
+        let o = (Vec3A::from(self.o) - Vec3A::from(c.as_vec3())) * s;
+        GridRay { o: o.into(), d: d.into(), inv_d: inv_d.into(), t0, t1 }
     }
 
     /// The cell containing the segment's start, clamped into the grid.
