@@ -306,7 +306,12 @@ impl Renderer {
         q.write_buffer(&t.camera, 0, bytemuck::bytes_of(&cam));
         let sp = ShadeParams { first_pixel: first, pixel_count: count, ..shade_params(bounds, o) };
         q.write_buffer(&t.shade, 0, bytemuck::bytes_of(&sp));
-        let topts = TraceOptions { traversal: o.traversal, mailbox: o.mailbox, query: Query::Closest };
+        let topts = TraceOptions {
+            traversal: o.traversal,
+            mailbox: o.mailbox,
+            query: Query::Closest,
+            ..TraceOptions::default()
+        };
         let (tp, image) = crate::trace::dispatch_params(s, (first, count), topts, o.packets.then_some(o.width));
         q.write_buffer(&t.trace_params, 0, bytemuck::bytes_of(&tp));
         // Shadow rays ask only whether anything occludes the light: any hit.

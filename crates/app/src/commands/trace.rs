@@ -18,7 +18,12 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     if args.traversal == Traversal::Bresenham {
         eprintln!("warning: naive Bresenham is incomplete by design and misses hits (survey Figure 1)");
     }
-    let opts = TraceOptions { traversal: args.traversal, mailbox: args.mailbox, ..Default::default() };
+    let opts = TraceOptions {
+        traversal: args.traversal,
+        mailbox: args.mailbox,
+        interleave: !args.no_interleave,
+        ..Default::default()
+    };
     let (label, build_ms, memory, hits, stats, secs) = match args.backend {
         Backend::Brute => {
             let start = Instant::now();

@@ -1,5 +1,5 @@
 //! Tracing: the closest-hit rule ([`closest_hit`], shared by every structure), the flat grid's
-//! walk, and batches of rays on all threads.
+//! walk, batches of rays on all threads, and [`interleaved`] walks for incoherent batches.
 
 pub mod closest_hit;
 pub mod interleaved;
@@ -14,19 +14,30 @@ pub use closest_hit::Query;
 use closest_hit::closest_hit;
 
 /// Per-trace settings.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TraceOptions {
     pub traversal: Traversal,
     pub mailbox: bool,
     /// Closest hit, or any hit (occlusion).
     pub query: Query,
+    /// Batches of incoherent rays on a large flat or macrocell grid walk interleaved
+    /// ([`interleaved`]; the same hits and stats). Off: every ray walks alone, as the other
+    /// structures' rays do (for comparing walks one to one).
+    pub interleave: bool,
+}
+
+impl Default for TraceOptions {
+    /// Amanatides–Woo, no mailbox, closest hits, interleaving where it pays.
+    fn default() -> TraceOptions {
+        TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: false, query: Query::Closest, interleave: true }
+    }
 }
 
 impl TraceOptions {
     /// Amanatides–Woo with the mailbox, closest hits: what the benchmarks, probes and renders
     /// trace with unless told otherwise.
     pub const MAILBOX: TraceOptions =
-        TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, query: Query::Closest };
+        TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox: true, query: Query::Closest, interleave: true };
 
     /// These options for an occlusion query ([`Query::Any`]).
     pub fn occlusion(self) -> TraceOptions {

@@ -116,7 +116,7 @@ fn occlusion_queries_equal_brute_force_on_segments_ending_at_hits() {
                 let (grid, _) = structure::build(&tris, &cfg).unwrap();
                 for traversal in Traversal::EXACT {
                     for mailbox in [false, true] {
-                        let opts = TraceOptions { traversal, mailbox, query: Query::Any };
+                        let opts = TraceOptions { traversal, mailbox, query: Query::Any, ..Default::default() };
                         let (any, _) = grid.trace_batch(&tris, &segments, opts, true);
                         let what = format!("{name} {kind} {insert:?} {traversal} mailbox={mailbox}");
                         assert_same_occlusion(&what, &tris, &segments, &expected, &any);
@@ -199,7 +199,8 @@ fn interleaved_walks_equal_single_rays_and_brute_force() {
                 let (grid, _) = structure::build(&tris, &cfg).unwrap();
                 for query in [Query::Closest, Query::Any] {
                     for mailbox in [false, true] {
-                        let opts = TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox, query };
+                        let opts =
+                            TraceOptions { traversal: Traversal::AmanatidesWoo, mailbox, query, ..Default::default() };
                         let what = format!("{name} {kind} {insert:?} {query:?} mailbox={mailbox}");
                         let (single, per_ray): (Vec<_>, Vec<_>) =
                             rays.iter().map(|r| grid.trace(&tris, r, opts)).unzip();
