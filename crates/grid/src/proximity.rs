@@ -55,27 +55,17 @@ impl ProximityGrid {
             loop {
                 // Set when the walk leaves an empty cube: it restarts at the cube's exit.
                 let mut restart = None;
-                let (_, cells) = walk_counted(traversal, &gr, res, |cell, idx, t_exit| {
-                    let k = self.distance[idx] as u32;
-                    if k >= MIN_JUMP_DISTANCE {
-                        // Leave the empty cube around this cell.
-                        let lo = cell.saturating_sub(UVec3::splat(k - 1));
-                        let hi = (cell + UVec3::splat(k)).min(res);
-                        let t = exit_of_box(&gr, lo, hi).min(gr.t1);
-                        if t > gr.t0 && t < gr.t1 {
+                let (_, cells) =
+                    walk_counted(traversal, &gr, res, |cell, idx, t_exit| match self.jump(&gr, cell, idx) {
+                        Jump::Restart(t) => {
                             restart = Some(t);
-                            return true;
+                            true
                         }
-                        if t >= gr.t1 {
-                            return true;
-                        }
-                    }
-                    // Distance 0 is an occupied cell (the tests are a call, as in the flat grid).
-                    if k != 0 {
-                        return search.done_at(t_exit);
-                    }
-                    self.grid.test_occupied(search, idx, t_exit)
-                });
+                        Jump::End => true,
+                        Jump::Step { empty: true } => search.done_at(t_exit),
+                        // The tests are a call, as in the flat grid.
+                        Jump::Step { empty: false } => self.grid.test_occupied(search, idx, t_exit),
+                    });
                 search.visit_cells(cells);
                 match restart {
                     Some(t) => gr.t0 = t,
@@ -83,6 +73,42 @@ impl ProximityGrid {
                 }
             }
         })
+    }
+}
+
+/// What a ray does in a cell of a proximity grid ([`ProximityGrid::jump`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Jump {
+    /// Leave the empty cube around the cell: the walk restarts at this `t`.
+    Restart(f32),
+    /// The empty cube reaches past the segment's end: the walk ends.
+    End,
+    /// Step on through the cell (occupied, or empty with too small a cube to jump out of).
+    Step { empty: bool },
+}
+
+impl ProximityGrid {
+    /// What `ray` (its segment clipped to the grid) does in cell `cell` at address `idx`: jump out
+    /// of the empty cube around it when the cube is at least [`MIN_JUMP_DISTANCE`] across and
+    /// the jump moves the ray on, else step. The one rule of the single-ray walk and the
+    /// interleaved one ([`crate::trace::interleaved`]).
+    #[inline(always)]
+    pub fn jump(&self, ray: &GridRay, cell: UVec3, idx: usize) -> Jump {
+        let k = self.distance[idx] as u32;
+        if k >= MIN_JUMP_DISTANCE {
+            // Leave the empty cube around this cell.
+            let lo = cell.saturating_sub(UVec3::splat(k - 1));
+            let hi = (cell + UVec3::splat(k)).min(self.grid.geom.res);
+            let t = exit_of_box(ray, lo, hi).min(ray.t1);
+            if t > ray.t0 && t < ray.t1 {
+                return Jump::Restart(t);
+            }
+            if t >= ray.t1 {
+                return Jump::End;
+            }
+        }
+        // Distance 0 is an occupied cell.
+        Jump::Step { empty: k != 0 }
     }
 }
 

@@ -1,4 +1,4 @@
-//! Interleaved walks: a batch's rays walk the flat grid [`SLOTS`] at a time, each advancing one
+//! Interleaved walks: a batch's rays walk a flat, macrocell or proximity grid [`SLOTS`] at a time, each advancing one
 //! stage per turn while the loads the others asked for are in flight.
 //!
 //! An occupied cell costs a chain of dependent loads: its offset in `ref_start`, then its
@@ -22,6 +22,7 @@ use super::{TraceOptions, trace_each, trace_flat};
 use crate::flat::FlatGrid;
 use crate::geometry::GridRay;
 use crate::macrocell::MacrocellGrid;
+use crate::proximity::{Jump, ProximityGrid};
 use crate::stats::{BatchStats, RayStats};
 use crate::traversal::amanatides_woo::{AmanatidesWoo, LinearWalk};
 
@@ -75,6 +76,21 @@ pub fn trace_flat_chunk(
         trace_flat_interleaved(grid, tris, rays, hits, opts)
     } else {
         trace_each(rays, hits, |r| trace_flat(grid, tris, r, opts))
+    }
+}
+
+/// [`trace_flat_chunk`] for the proximity grid (its single-ray walk: [`ProximityGrid::trace`]).
+pub fn trace_proximity_chunk(
+    grid: &ProximityGrid,
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    hits: &mut [Hit],
+    opts: TraceOptions,
+) -> BatchStats {
+    if pays(grid.memory_bytes() + size_of_val(tris) as u64, rays) {
+        trace_proximity_interleaved(grid, tris, rays, hits, opts)
+    } else {
+        trace_each(rays, hits, |r| grid.trace(tris, r, opts))
     }
 }
 
@@ -226,6 +242,51 @@ impl CellWalk for MacrocellWalk<'_> {
     }
 }
 
+/// The proximity grid's walk ([`ProximityGrid::trace`]'s): the flat grid's, restarted beyond
+/// each empty cube it jumps out of.
+#[derive(Debug)]
+pub struct ProximityWalk<'g> {
+    grid: &'g ProximityGrid,
+    /// The segment still to walk (its start moves with each jump).
+    ray: GridRay,
+    walk: LinearWalk,
+}
+
+impl<'g> ProximityWalk<'g> {
+    /// The walk of `search`'s ray through `grid`, or `None` when the ray misses the grid.
+    pub fn new(grid: &'g ProximityGrid, search: &ClosestHit) -> Option<ProximityWalk<'g>> {
+        let ray = grid.grid.geom.clip(&search.ray)?;
+        Some(ProximityWalk { grid, ray, walk: AmanatidesWoo::new(&ray, grid.grid.geom.res).linear() })
+    }
+}
+
+impl CellWalk for ProximityWalk<'_> {
+    fn cells(&self) -> &FlatGrid {
+        &self.grid.grid
+    }
+
+    #[inline]
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
+        loop {
+            let (cell, idx, t_exit) = self.walk.next_cell()?;
+            *cells += 1;
+            match self.grid.jump(&self.ray, cell, idx) {
+                Jump::Restart(t) => {
+                    self.ray.t0 = t;
+                    self.walk = AmanatidesWoo::new(&self.ray, self.grid.grid.geom.res).linear();
+                }
+                Jump::End => return None,
+                Jump::Step { empty: true } => {
+                    if search.done_at(t_exit) {
+                        return None;
+                    }
+                }
+                Jump::Step { empty: false } => return Some((idx, t_exit)),
+            }
+        }
+    }
+}
+
 /// One ray in flight.
 struct Slot<'a, W> {
     /// Its index in the batch.
@@ -334,6 +395,17 @@ pub fn trace_flat_interleaved(
     opts: TraceOptions,
 ) -> BatchStats {
     trace_interleaved(tris, rays, hits, opts, |search| FlatWalk::new(grid, search))
+}
+
+/// [`trace_flat_interleaved`] for the proximity grid ([`ProximityGrid::trace`] ray by ray).
+pub fn trace_proximity_interleaved(
+    grid: &ProximityGrid,
+    tris: &[[Vec3; 3]],
+    rays: &[Ray],
+    hits: &mut [Hit],
+    opts: TraceOptions,
+) -> BatchStats {
+    trace_interleaved(tris, rays, hits, opts, |search| ProximityWalk::new(grid, search))
 }
 
 /// [`trace_flat_interleaved`] for the macrocell grid ([`MacrocellGrid::trace`] ray by ray).

@@ -176,11 +176,13 @@ fn rays_from_inside_closed_meshes_never_escape() {
 #[test]
 fn interleaved_walks_equal_single_rays_and_brute_force() {
     // The interleaved paths run by themselves (whatever the grid's size and the rays'
-    // coherence): hits and stats equal the single-ray walks' on every ray, for the flat and the
-    // macrocell grid, both queries and insertions, with and without the mailbox, and on batches
+    // coherence): hits and stats equal the single-ray walks' on every ray, for the flat, the
+    // macrocell and the proximity grid, both queries and insertions, with and without the mailbox, and on batches
     // shorter than the slots (rays in flight end in every order: misses of the grid, rays no
     // triangle can be hit by, clipped segments).
-    use gridrt_grid::trace::interleaved::{SLOTS, trace_flat_interleaved, trace_macrocell_interleaved};
+    use gridrt_grid::trace::interleaved::{
+        SLOTS, trace_flat_interleaved, trace_macrocell_interleaved, trace_proximity_interleaved,
+    };
     let mut scenes = procedural_scenes();
     scenes.push((
         "particles, 100k".into(),
@@ -193,7 +195,7 @@ fn interleaved_walks_equal_single_rays_and_brute_force() {
         rays.push(Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, f32::INFINITY));
         rays.push(Ray::new(Vec3::splat(f32::NAN), Vec3::X, 0.0, 1.0));
         let (expected, _) = reference(&tris, &rays);
-        for kind in [GridKind::Flat, GridKind::Macrocell] {
+        for kind in [GridKind::Flat, GridKind::Macrocell, GridKind::Proximity] {
             for insert in InsertMode::ALL {
                 let cfg = GridConfig { kind, build: BuildOptions { insert, parallel: true }, ..GridConfig::default() };
                 let (grid, _) = structure::build(&tris, &cfg).unwrap();
@@ -210,6 +212,7 @@ fn interleaved_walks_equal_single_rays_and_brute_force() {
                             let stats = match &grid {
                                 AnyGrid::Flat(f) => trace_flat_interleaved(f, &tris, rs, hs, opts),
                                 AnyGrid::Macrocell(m) => trace_macrocell_interleaved(m, &tris, rs, hs, opts),
+                                AnyGrid::Proximity(p) => trace_proximity_interleaved(p, &tris, rs, hs, opts),
                                 _ => unreachable!(),
                             };
                             let mut want = gridrt_grid::BatchStats::default();
