@@ -184,13 +184,13 @@ impl AnyGrid {
             // large grid interleaved, so that the loads of an occupied cell's offset, references and
             // triangles overlap across rays.
             AnyGrid::Flat(g) if opts.interleave && opts.traversal == Traversal::AmanatidesWoo => {
-                trace_chunks(rays, parallel, |r, h| interleaved::trace_flat_chunk(g, tris, r, h, opts))
+                trace_chunks(rays, parallel, |r, h| interleaved::trace_chunk(g, tris, r, h, opts))
             }
             AnyGrid::Macrocell(g) if opts.interleave && opts.traversal == Traversal::AmanatidesWoo => {
-                trace_chunks(rays, parallel, |r, h| interleaved::trace_macrocell_chunk(g, tris, r, h, opts))
+                trace_chunks(rays, parallel, |r, h| interleaved::trace_chunk(g, tris, r, h, opts))
             }
             AnyGrid::Proximity(p) if opts.interleave && opts.traversal == Traversal::AmanatidesWoo => {
-                trace_chunks(rays, parallel, |r, h| interleaved::trace_proximity_chunk(p, tris, r, h, opts))
+                trace_chunks(rays, parallel, |r, h| interleaved::trace_chunk(p, tris, r, h, opts))
             }
             _ => trace_batch(rays, parallel, |r| self.trace(tris, r, opts)),
         }

@@ -30,7 +30,7 @@ use crate::traversal::amanatides_woo::{AmanatidesWoo, LinearWalk};
 /// to the last-level cache.
 pub const SLOTS: usize = 8;
 
-/// Bytes of grid and triangles beyond which interleaving pays ([`trace_flat_chunk`]): below,
+/// Bytes of grid and triangles beyond which interleaving pays ([`trace_chunk`]): below,
 /// the arrays stay in the core's cache and the turns only add work.
 pub const INTERLEAVE_MIN_BYTES: u64 = 2 << 20;
 
@@ -63,49 +63,55 @@ pub fn pays(bytes: u64, rays: &[Ray]) -> bool {
     bytes > INTERLEAVE_MIN_BYTES && incoherent(rays)
 }
 
+/// A grid whose batches can walk interleaved: its walk to the next occupied cell, its bytes
+/// (with [`pays`]) and its single-ray trace.
+pub trait Interleave {
+    type Walk<'g>: CellWalk
+    where
+        Self: 'g;
+    /// The walk of `search`'s ray, or `None` when the ray misses the grid.
+    fn walk<'g>(&'g self, search: &ClosestHit) -> Option<Self::Walk<'g>>;
+    fn memory_bytes(&self) -> u64;
+    /// The ray-by-ray trace the interleaved walk equals.
+    fn trace_one(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats);
+}
+
+/// [`Interleave`] for a grid: its walk type, and its single-ray trace of `ray` as an expression
+/// of `grid`, `tris`, `ray` and `opts`.
+macro_rules! interleave {
+    ($grid:ty, $walk:ident, |$g:ident, $tris:ident, $ray:ident, $opts:ident| $trace:expr) => {
+        impl Interleave for $grid {
+            type Walk<'g> = $walk<'g>;
+            fn walk<'g>(&'g self, search: &ClosestHit) -> Option<$walk<'g>> {
+                $walk::new(self, search)
+            }
+            fn memory_bytes(&self) -> u64 {
+                <$grid>::memory_bytes(self)
+            }
+            fn trace_one(&self, $tris: &[[Vec3; 3]], $ray: &Ray, $opts: TraceOptions) -> (Hit, RayStats) {
+                let $g = self;
+                $trace
+            }
+        }
+    };
+}
+interleave!(FlatGrid, FlatWalk, |g, tris, ray, opts| trace_flat(g, tris, ray, opts));
+interleave!(MacrocellGrid, MacrocellWalk, |g, tris, ray, opts| g.trace(tris, ray, opts));
+interleave!(ProximityGrid, ProximityWalk, |g, tris, ray, opts| g.trace(tris, ray, opts));
+
 /// Closest hits (or any hits) of a chunk of `rays` in `grid`, written to `hits`: interleaved
 /// when it [`pays`], else ray by ray.
-pub fn trace_flat_chunk(
-    grid: &FlatGrid,
+pub fn trace_chunk<G: Interleave>(
+    grid: &G,
     tris: &[[Vec3; 3]],
     rays: &[Ray],
     hits: &mut [Hit],
     opts: TraceOptions,
 ) -> BatchStats {
     if pays(grid.memory_bytes() + size_of_val(tris) as u64, rays) {
-        trace_flat_interleaved(grid, tris, rays, hits, opts)
+        trace_grid_interleaved(grid, tris, rays, hits, opts)
     } else {
-        trace_each(rays, hits, |r| trace_flat(grid, tris, r, opts))
-    }
-}
-
-/// [`trace_flat_chunk`] for the proximity grid (its single-ray walk: [`ProximityGrid::trace`]).
-pub fn trace_proximity_chunk(
-    grid: &ProximityGrid,
-    tris: &[[Vec3; 3]],
-    rays: &[Ray],
-    hits: &mut [Hit],
-    opts: TraceOptions,
-) -> BatchStats {
-    if pays(grid.memory_bytes() + size_of_val(tris) as u64, rays) {
-        trace_proximity_interleaved(grid, tris, rays, hits, opts)
-    } else {
-        trace_each(rays, hits, |r| grid.trace(tris, r, opts))
-    }
-}
-
-/// [`trace_flat_chunk`] for the macrocell grid (its single-ray walk: [`MacrocellGrid::trace`]).
-pub fn trace_macrocell_chunk(
-    grid: &MacrocellGrid,
-    tris: &[[Vec3; 3]],
-    rays: &[Ray],
-    hits: &mut [Hit],
-    opts: TraceOptions,
-) -> BatchStats {
-    if pays(grid.memory_bytes() + size_of_val(tris) as u64, rays) {
-        trace_macrocell_interleaved(grid, tris, rays, hits, opts)
-    } else {
-        trace_each(rays, hits, |r| grid.trace(tris, r, opts))
+        trace_each(rays, hits, |r| grid.trace_one(tris, r, opts))
     }
 }
 
@@ -386,35 +392,13 @@ pub fn trace_interleaved<W: CellWalk>(
 
 /// Closest hits (or any hits, by `opts.query`) of `rays` in `grid` over `tris`, written to
 /// `hits` (as long as `rays`), [`SLOTS`] rays walking at once; the rays' stats summed. The
-/// hits and stats of [`trace_flat`](super::trace_flat) ray by ray (Amanatides–Woo).
-pub fn trace_flat_interleaved(
-    grid: &FlatGrid,
+/// hits and stats of the grid's single-ray trace ray by ray (Amanatides–Woo).
+pub fn trace_grid_interleaved<G: Interleave>(
+    grid: &G,
     tris: &[[Vec3; 3]],
     rays: &[Ray],
     hits: &mut [Hit],
     opts: TraceOptions,
 ) -> BatchStats {
-    trace_interleaved(tris, rays, hits, opts, |search| FlatWalk::new(grid, search))
-}
-
-/// [`trace_flat_interleaved`] for the proximity grid ([`ProximityGrid::trace`] ray by ray).
-pub fn trace_proximity_interleaved(
-    grid: &ProximityGrid,
-    tris: &[[Vec3; 3]],
-    rays: &[Ray],
-    hits: &mut [Hit],
-    opts: TraceOptions,
-) -> BatchStats {
-    trace_interleaved(tris, rays, hits, opts, |search| ProximityWalk::new(grid, search))
-}
-
-/// [`trace_flat_interleaved`] for the macrocell grid ([`MacrocellGrid::trace`] ray by ray).
-pub fn trace_macrocell_interleaved(
-    grid: &MacrocellGrid,
-    tris: &[[Vec3; 3]],
-    rays: &[Ray],
-    hits: &mut [Hit],
-    opts: TraceOptions,
-) -> BatchStats {
-    trace_interleaved(tris, rays, hits, opts, |search| MacrocellWalk::new(grid, search))
+    trace_interleaved(tris, rays, hits, opts, |search| grid.walk(search))
 }

@@ -180,9 +180,7 @@ fn interleaved_walks_equal_single_rays_and_brute_force() {
     // macrocell and the proximity grid, both queries and insertions, with and without the mailbox, and on batches
     // shorter than the slots (rays in flight end in every order: misses of the grid, rays no
     // triangle can be hit by, clipped segments).
-    use gridrt_grid::trace::interleaved::{
-        SLOTS, trace_flat_interleaved, trace_macrocell_interleaved, trace_proximity_interleaved,
-    };
+    use gridrt_grid::trace::interleaved::{SLOTS, trace_grid_interleaved};
     let mut scenes = procedural_scenes();
     scenes.push((
         "particles, 100k".into(),
@@ -210,9 +208,9 @@ fn interleaved_walks_equal_single_rays_and_brute_force() {
                             let mut hits = vec![gridrt_scene::Hit::MISS; len];
                             let (rs, hs) = (&rays[..len], &mut hits[..]);
                             let stats = match &grid {
-                                AnyGrid::Flat(f) => trace_flat_interleaved(f, &tris, rs, hs, opts),
-                                AnyGrid::Macrocell(m) => trace_macrocell_interleaved(m, &tris, rs, hs, opts),
-                                AnyGrid::Proximity(p) => trace_proximity_interleaved(p, &tris, rs, hs, opts),
+                                AnyGrid::Flat(f) => trace_grid_interleaved(f, &tris, rs, hs, opts),
+                                AnyGrid::Macrocell(m) => trace_grid_interleaved(m, &tris, rs, hs, opts),
+                                AnyGrid::Proximity(p) => trace_grid_interleaved(p, &tris, rs, hs, opts),
                                 _ => unreachable!(),
                             };
                             let mut want = gridrt_grid::BatchStats::default();
