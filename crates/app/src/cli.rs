@@ -413,8 +413,9 @@ pub struct TraceArgs {
     /// Skip triangles this ray already tested (hashed per-ray mailbox).
     #[arg(long)]
     pub mailbox: bool,
-    /// Walk every ray alone. By default incoherent rays on a flat or macrocell grid larger than
-    /// 2 MiB walk eight at a time, interleaved so that their cache misses overlap (same hits).
+    /// Walk every ray alone. By default incoherent rays on a flat, macrocell or proximity grid
+    /// larger than 2 MiB walk eight at a time, interleaved so that their cache misses overlap
+    /// (same hits).
     #[arg(long)]
     pub no_interleave: bool,
     #[arg(long, value_enum, default_value = "cpu")]

@@ -20,7 +20,7 @@ pub struct TraceOptions {
     pub mailbox: bool,
     /// Closest hit, or any hit (occlusion).
     pub query: Query,
-    /// Batches of incoherent rays on a large flat or macrocell grid walk interleaved
+    /// Batches of incoherent rays on a large flat, macrocell or proximity grid walk interleaved
     /// ([`interleaved`]; the same hits and stats). Off: every ray walks alone, as the other
     /// structures' rays do (for comparing walks one to one).
     pub interleave: bool,
