@@ -762,7 +762,15 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
         }
     }
     let scaling = v["scaling"].as_array().unwrap();
-    assert_eq!(scaling.len(), 18, "(3 particle + 3 mountain sizes) × (flat, bvh, obvhs)");
+    assert_eq!(scaling.len(), 27, "(3 + 3 particle + 3 mountain sizes) × (flat, bvh, obvhs)");
+    // Both particle families (fixed size; size shrinking as N^-1/3), and the grid's references.
+    assert!(scaling.iter().any(|p| p["scene"] == "particles, size ∝ N^-1/3"), "{scaling:?}");
+    for p in scaling.iter().filter(|p| p["structure"] == "flat") {
+        assert!(p["refs"].as_u64().unwrap() >= p["triangles"].as_u64().unwrap(), "{p}");
+    }
+    let refs_slopes = v["targets"].as_array().unwrap().iter();
+    let refs_slopes = refs_slopes.filter(|t| t["target"] == "flat build: log–log slope of time against references");
+    assert_eq!(refs_slopes.count(), 3, "a slope in references per family");
     let targets = v["targets"].as_array().unwrap();
     for t in [
         "best grid / best BVH Mrays/s, framed",
