@@ -40,8 +40,8 @@ pub(crate) fn pipeline_walking(
     let src = compose_with(file, walker)?;
     let desc = wgpu::ShaderModuleDescriptor { label: Some(file), source: wgpu::ShaderSource::Wgsl(src.into()) };
     // Every check but wgpu's loop bounding, which adds a counter and a test to every iteration
-    // of every loop (the walks' loops are the kernels' hot paths: GPU Mrays/s 1.0–1.15× on
-    // lavapipe without it). The browser's WebGPU ignores these settings.
+    // of every loop, and the walks' loops are the kernels' hot paths (measured in the README's
+    // #18 section). The browser's WebGPU ignores these settings.
     let mut checks = wgpu::ShaderRuntimeChecks::checked();
     checks.force_loop_bounding = false;
     // SAFETY: without loop bounding, a loop that never ends would be undefined behaviour. Every
