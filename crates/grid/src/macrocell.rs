@@ -29,7 +29,8 @@ use crate::geometry::{GridGeometry, GridRay, linear_index};
 use crate::stats::RayStats;
 use crate::trace::TraceOptions;
 use crate::trace::closest_hit::{ClosestHit, closest_hit};
-use crate::traversal::{Traversal, walk_counted};
+use crate::traversal::amanatides_woo::AmanatidesWoo;
+use crate::traversal::{Traversal, Visit, walk_counted};
 
 /// Macrocell sizes the cost model chooses among.
 pub const MACRO_SIZES: [u32; 4] = [2, 4, 8, 16];
@@ -114,9 +115,22 @@ impl MacrocellGrid {
         self.occupancy.iter().map(|w| w.count_ones() as u64).sum()
     }
 
-    /// Closest hit: macro walk, fine walk inside occupied macrocells.
+    /// Closest hit. Amanatides–Woo: one walk of the fine cells that leaves an empty macrocell
+    /// in one jump ([`AmanatidesWoo::walk_blocks`]); the other walkers: the macro walk, and a
+    /// walk of the fine cells inside each occupied macrocell.
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
         let traversal = opts.traversal;
+        if traversal == Traversal::AmanatidesWoo {
+            let r = closest_hit(tris, ray, opts, |search| {
+                let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
+                let walk = AmanatidesWoo::new(&fine_ray, self.fine.geom.res);
+                let empty = |m: UVec3| !self.occupied(m);
+                let (_, cells) =
+                    walk.walk_blocks(self.log2_edge(), empty, |c, index, t_exit| self.visit(search, c, index, t_exit));
+                search.visit_cells(cells);
+            });
+            return r;
+        }
         closest_hit(tris, ray, opts, |search| {
             let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
             let macro_ray = self.macro_ray(&fine_ray);
@@ -132,6 +146,28 @@ impl MacrocellGrid {
             });
             search.visit_cells(cells);
         })
+    }
+
+    /// A fine cell's visit in the walk over macrocells: its tests when it holds triangles, a
+    /// jump out of its macrocell when that is empty.
+    #[inline]
+    pub fn visit(&self, search: &mut ClosestHit, c: UVec3, index: usize, t_exit: f32) -> Visit {
+        if self.fine.is_occupied(index) {
+            if self.fine.test_occupied(search, index, t_exit) {
+                return Visit::Stop;
+            }
+        } else if !self.occupied(c >> self.log2_edge()) {
+            return Visit::LeaveBlock;
+        } else if search.done_at(t_exit) {
+            return Visit::Stop;
+        }
+        Visit::Next
+    }
+
+    /// log2 of the macrocell edge A.
+    #[inline]
+    pub fn log2_edge(&self) -> u32 {
+        self.a.trailing_zeros()
     }
 
     /// The fine grid's ray `fine_ray` in the macro grid's space (exact: A is a power of two).

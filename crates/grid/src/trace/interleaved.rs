@@ -14,7 +14,7 @@
 //! [`crate::traversal::walk`]), the same [`ClosestHit`] tests and stopping rule, so the hits
 //! and the stats are the same bit for bit.
 
-use glam::{UVec3, Vec3};
+use glam::Vec3;
 use gridrt_scene::{Hit, Ray};
 
 use super::closest_hit::{ClosestHit, prefetch};
@@ -139,19 +139,16 @@ pub trait CellWalk {
     fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)>;
 }
 
-/// The cells of `walk` in `grid` up to the next occupied one (see [`CellWalk::next_occupied`]):
-/// `at(cell)` is a cell's index in `grid`.
+/// The cells of `walk` in `grid` up to the next occupied one (see [`CellWalk::next_occupied`]).
 #[inline(always)]
 fn next_occupied_of(
     walk: &mut LinearWalk,
     grid: &FlatGrid,
-    at: impl Fn(UVec3, usize) -> usize,
     search: &ClosestHit,
     cells: &mut u32,
 ) -> Option<Option<(usize, f32)>> {
-    while let Some((cell, addr, t_exit)) = walk.next_cell() {
+    while let Some((_, index, t_exit)) = walk.next_cell() {
         *cells += 1;
-        let index = at(cell, addr);
         if grid.is_occupied(index) {
             return Some(Some((index, t_exit)));
         }
@@ -185,30 +182,23 @@ impl CellWalk for FlatWalk<'_> {
 
     #[inline]
     fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
-        next_occupied_of(&mut self.walk, self.grid, |_, addr| addr, search, cells).flatten()
+        next_occupied_of(&mut self.walk, self.grid, search, cells).flatten()
     }
 }
 
-/// The macrocell grid's walk ([`MacrocellGrid::trace`]'s): the macro walk, and in each
-/// occupied macrocell the walk of its block of fine cells.
+/// The macrocell grid's walk ([`MacrocellGrid::trace`]'s): the fine cells, with the empty
+/// macrocells crossed as blocks ([`LinearWalk::cross_blocks`]).
 #[derive(Debug)]
 pub struct MacrocellWalk<'g> {
     grid: &'g MacrocellGrid,
-    /// The ray in the fine grid's space (each block's walk starts from it).
-    fine_ray: GridRay,
-    macro_walk: LinearWalk,
-    /// Where the ray entered the current macrocell.
-    t_enter: f32,
-    /// The block being walked: its first fine cell, its walk and the macrocell's exit.
-    block: Option<(UVec3, LinearWalk, f32)>,
+    walk: LinearWalk,
 }
 
 impl<'g> MacrocellWalk<'g> {
     /// The walk of `search`'s ray through `grid`, or `None` when the ray misses the grid.
     pub fn new(grid: &'g MacrocellGrid, search: &ClosestHit) -> Option<MacrocellWalk<'g>> {
         let fine_ray = grid.fine.geom.clip(&search.ray)?;
-        let macro_walk = AmanatidesWoo::new(&grid.macro_ray(&fine_ray), grid.macro_res).linear();
-        Some(MacrocellWalk { grid, fine_ray, macro_walk, t_enter: fine_ray.t0, block: None })
+        Some(MacrocellWalk { grid, walk: AmanatidesWoo::new(&fine_ray, grid.fine.geom.res).linear() })
     }
 }
 
@@ -219,29 +209,23 @@ impl CellWalk for MacrocellWalk<'_> {
 
     #[inline]
     fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
-        let fine = &self.grid.fine;
+        let (grid, log2) = (self.grid, self.grid.log2_edge());
         loop {
-            if let Some((lo, walk, m_exit)) = &mut self.block {
-                let lo = *lo;
-                match next_occupied_of(walk, fine, |c, _| fine.geom.cell_index(lo + c), search, cells) {
-                    Some(found) => return found,
-                    // The block's cells are walked: the macrocell's end, as after its block walk.
-                    None => {
-                        let m_exit = *m_exit;
-                        self.block = None;
-                        if search.done_at(m_exit) {
-                            return None;
-                        }
-                    }
+            // The single-ray walk's visit ([`MacrocellGrid::visit`]), counted alike.
+            let (cell, addr) = self.walk.current()?;
+            if !grid.fine.is_occupied(addr) && !grid.occupied(cell >> log2) {
+                *cells += 1;
+                if !self.walk.cross_blocks(log2, |m| !grid.occupied(m), cells) {
+                    return None;
                 }
+                continue;
             }
-            let (m, addr, m_exit) = self.macro_walk.next_cell()?;
+            let (_, addr, t_exit) = self.walk.next_cell()?;
             *cells += 1;
-            let entered = std::mem::replace(&mut self.t_enter, m_exit);
-            if self.grid.occupied_at(addr) {
-                let (lo, sub) = self.grid.block_ray(m, &self.fine_ray, entered, m_exit);
-                self.block = Some((lo, AmanatidesWoo::new(&sub, UVec3::splat(self.grid.a)).linear(), m_exit));
-            } else if search.done_at(m_exit) {
+            if grid.fine.is_occupied(addr) {
+                return Some((addr, t_exit));
+            }
+            if search.done_at(t_exit) {
                 return None;
             }
         }

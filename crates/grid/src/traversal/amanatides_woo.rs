@@ -8,8 +8,9 @@
 //! compiler can contract into an FMA, so the WGSL port takes exactly the same steps.
 
 use glam::{IVec3, UVec3, Vec3};
+use wide::f32x8;
 
-use super::{CellStep, Cursor, argmin3};
+use super::{CellStep, Cursor, Visit, argmin3};
 use crate::geometry::{GridRay, linear_index};
 
 #[derive(Clone, Debug)]
@@ -79,6 +80,37 @@ impl AmanatidesWoo {
             }
             if w.ends_at(t) || !w.cross(a) {
                 return false;
+            }
+        }
+    }
+
+    /// [`AmanatidesWoo::walk_linear`] over a grid in blocks of 2^`log2` cells per edge (a
+    /// macrocell grid's fine cells): `visit(cell, address, t_exit)` says whether to stop, go on
+    /// to the next cell, or leave the cell's block, which holds nothing; then the walk crosses
+    /// blocks while `empty_block(block)` ([`LinearWalk::cross_blocks`]). The cells visited are
+    /// the flat walk's, less those in empty blocks. Returns whether `visit` stopped the walk,
+    /// and the number of visits and empty blocks crossed.
+    #[inline]
+    pub fn walk_blocks(
+        self,
+        log2: u32,
+        empty_block: impl Fn(UVec3) -> bool,
+        mut visit: impl FnMut(UVec3, usize, f32) -> Visit,
+    ) -> (bool, u32) {
+        let mut w = self.linear();
+        let mut visits = 0;
+        if w.done {
+            return (false, visits);
+        }
+        loop {
+            let (a, t) = w.next_axis();
+            visits += 1;
+            match visit(w.cell.as_uvec3(), w.addr as usize, t.min(w.t1)) {
+                Visit::Stop => return (true, visits),
+                Visit::Next if w.ends_at(t) || !w.cross(a) => return (false, visits),
+                Visit::Next => {}
+                Visit::LeaveBlock if !w.cross_blocks(log2, &empty_block, &mut visits) => return (false, visits),
+                Visit::LeaveBlock => {}
             }
         }
     }
@@ -162,6 +194,129 @@ impl LinearWalk {
             _ => cross!(z),
         }
         true
+    }
+
+    /// From the current cell, whose block of 2^`log2` cells per edge is empty (blocks are
+    /// aligned to multiples of the edge and tile the grid): walks the grid of blocks to the
+    /// first one that `empty_block(block)` says is not, and sets this walk at the cell, walls
+    /// and crossings the cell-by-cell walk reaches there; each empty block entered after the
+    /// current one adds 1 to `crossed`. False when the walk ends first (the segment ends, or the
+    /// grid does).
+    ///
+    /// Exact, not estimated from an entry point: a block's walls are walls of this grid and
+    /// their crossings are computed as a step computes them, `(wall − o) · (1/d)`; the steps
+    /// take walls in the order of `(t, axis)` (each axis' crossings do not decrease along its
+    /// walls, ties go to the lower axis), so the walk of blocks crosses the block walls in the
+    /// cell walk's order, and on entering a block through axis `out` at `t`, the cell walk has
+    /// crossed on each other axis exactly the walls whose `(t, axis)` is less (counted on SIMD
+    /// lanes among the block's walls on that axis). The hierarchical DDA of the survey's
+    /// macrocells without a restarted walk's rounding: the cells visited after the blocks, their
+    /// order and their exits are the flat walk's.
+    #[inline]
+    pub fn cross_blocks(&mut self, log2: u32, empty_block: impl Fn(UVec3) -> bool, crossed: &mut u32) -> bool {
+        let res = self.res >> log2;
+        let mut block = self.cell >> log2;
+        let [(wx, tx), (wy, ty), (wz, tz)] =
+            [self.block_exit::<0>(log2), self.block_exit::<1>(log2), self.block_exit::<2>(log2)];
+        let (mut wall, mut t_max) = (IVec3::new(wx, wy, wz), Vec3::new(tx, ty, tz));
+        // A constant axis per arm keeps the blocks' walk in registers, as the cells' walk.
+        macro_rules! cross {
+            ($axis:ident) => {{
+                block.$axis += self.step.$axis;
+                if block.$axis < 0 || block.$axis >= res.$axis {
+                    self.done = true;
+                    return false;
+                }
+                wall.$axis += self.step.$axis << log2;
+                t_max.$axis = (wall.$axis as f32 - self.o.$axis) * self.inv_d.$axis;
+            }};
+        }
+        loop {
+            let out = argmin3(t_max.to_array());
+            let t = match out {
+                0 => t_max.x,
+                1 => t_max.y,
+                _ => t_max.z,
+            };
+            if t.is_nan() || t > self.t1 {
+                self.done = true;
+                return false;
+            }
+            match out {
+                0 => cross!(x),
+                1 => cross!(y),
+                _ => cross!(z),
+            }
+            if !empty_block(block.as_uvec3()) {
+                self.enter_block::<0>(log2, block.x, out, t);
+                self.enter_block::<1>(log2, block.y, out, t);
+                self.enter_block::<2>(log2, block.z, out, t);
+                self.addr = linear_index(self.cell.as_uvec3(), self.res.as_uvec3()) as isize;
+                return true;
+            }
+            *crossed += 1;
+        }
+    }
+
+    /// Axis `A`'s first wall beyond the current cell's block of 2^`log2` cells per edge, and
+    /// its crossing (never, on an axis the ray does not move along).
+    #[inline(always)]
+    fn block_exit<const A: usize>(&self, log2: u32) -> (i32, f32) {
+        let step = self.step[A];
+        if step == 0 {
+            return (0, f32::INFINITY);
+        }
+        let lo = (self.cell[A] >> log2) << log2;
+        let wall = if step > 0 { lo + (1 << log2) } else { lo };
+        (wall, (wall as f32 - self.o[A]) * self.inv_d[A])
+    }
+
+    /// Axis `A`'s part of [`LinearWalk::cross_blocks`]: the cell, next wall and crossing on
+    /// entering block `b` (its index on this axis) at `t` through axis `out`. On `out`, the
+    /// block's first cell. On another axis, the walls whose `(t, axis)` is less are crossed
+    /// (a prefix of the walls in the step's order), counted from the walk's next wall when the
+    /// walk is still in block `b` on this axis (the walls behind its first cell count as
+    /// crossed even where their `t` ties with the start: the first cell is where the segment
+    /// starts), else from the block's first wall (all walls before it have been crossed).
+    #[inline(always)]
+    fn enter_block<const A: usize>(&mut self, log2: u32, b: i32, out: usize, t: f32) {
+        let step = self.step[A];
+        if step == 0 {
+            return;
+        }
+        let first = if step > 0 { b << log2 } else { (b << log2) + (1 << log2) - 1 };
+        let (mut cell, mut wall) = (first, first + (step > 0) as i32);
+        if A != out {
+            if self.cell[A] >> log2 == b {
+                cell = self.cell[A];
+                wall = self.wall[A] as i32;
+            }
+            let (o, inv_d) = (f32x8::splat(self.o[A]), f32x8::splat(self.inv_d[A]));
+            let (tv, lanes) = (f32x8::splat(t), f32x8::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]));
+            let stepv = f32x8::splat(step as f32);
+            // Eight walls at a time (an edge of 16 cells may take two rounds); a wall's crossing
+            // is the step's own arithmetic (integral walls are exact in f32).
+            loop {
+                let t_walls = ((f32x8::splat(wall as f32) + lanes * stepv) - o) * inv_d;
+                let tie = if A < out { t_walls.simd_eq(tv) } else { f32x8::ZERO };
+                let n = (!(t_walls.simd_lt(tv) | tie).to_bitmask()).trailing_zeros() as i32;
+                cell += n * step;
+                wall += n * step;
+                if n < 8 {
+                    break;
+                }
+            }
+        }
+        self.cell[A] = cell;
+        let wall = wall as f32;
+        self.wall[A] = wall;
+        self.t_max[A] = (wall - self.o[A]) * self.inv_d[A];
+    }
+
+    /// The current cell and its address, without moving on; `None` once the walk has ended.
+    #[inline(always)]
+    pub fn current(&self) -> Option<(UVec3, usize)> {
+        (!self.done).then(|| (self.cell.as_uvec3(), self.addr as usize))
     }
 
     /// The current cell, its address and the `t` where the ray leaves it (capped at the

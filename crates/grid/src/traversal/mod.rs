@@ -78,6 +78,17 @@ impl std::fmt::Display for Traversal {
     }
 }
 
+/// What a walk over blocks of cells does after a visit ([`amanatides_woo::AmanatidesWoo::walk_blocks`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Visit {
+    /// The search is done.
+    Stop,
+    /// On to the next cell.
+    Next,
+    /// The cell's block is empty: on to the first cell beyond it.
+    LeaveBlock,
+}
+
 /// Any walker behind one type, for callers that pick the traversal at run time and do not need
 /// the last bit of speed (the closest-hit loop is generic instead).
 #[derive(Clone, Debug)]

@@ -263,3 +263,86 @@ fn walk_matches_the_walkers_iterators() {
     }
     assert!(compared > 20_000, "too few walks compared: {compared}");
 }
+
+/// The walk over blocks (macrocells' hierarchical DDA, `AmanatidesWoo::walk_blocks`) visits
+/// the flat walk's cells, addresses and exits bit for bit, except that each run of cells in
+/// empty blocks is visited at its first cell only; the count it returns adds each further
+/// empty block of the run. Blocks of 2 to 32 cells per edge (16 and 32 take the wall count's
+/// SIMD lanes more than once), random empty blocks, the adversarial rays (lattice corners,
+/// diagonals through corners, axis-parallel rays on walls: ties between axes), clipped
+/// segments, and walks that stop early.
+#[test]
+fn walk_blocks_is_the_flat_walk_less_empty_blocks() {
+    use gridrt_grid::traversal::Visit;
+    use gridrt_grid::traversal::amanatides_woo::AmanatidesWoo;
+    let mut rng = Rng::new(29);
+    let (mut compared, mut skipped_runs) = (0, 0);
+    for g in 0..60 {
+        let log2 = 1 + rng.below(5) as u32;
+        let edge = 1u32 << log2;
+        let blocks = UVec3::new(1 + rng.below(4) as u32, 1 + rng.below(4) as u32, 1 + rng.below(4) as u32);
+        let res = blocks * edge;
+        let lo = Vec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), rng.range(-5.0, 5.0));
+        // Power-of-two cell sizes on some grids: more crossings tie exactly.
+        let size = if g % 3 == 0 {
+            res.as_vec3() * 0.25
+        } else {
+            Vec3::new(rng.range(0.5, 8.0), rng.range(0.5, 8.0), rng.range(0.5, 8.0))
+        };
+        let geom = GridGeometry::new(&Aabb { min: lo, max: lo + size }, res.to_array());
+        assert_eq!(geom.res, res);
+        let empty_share = [0.3, 0.7, 0.95][g % 3];
+        let empty: Vec<bool> = (0..blocks.element_product()).map(|_| rng.f32() < empty_share).collect();
+        let block_empty = |b: UVec3| empty[(b.x + blocks.x * (b.y + blocks.y * b.z)) as usize];
+        for (i, ray) in adversarial_rays(&geom, &mut rng, 200).iter().enumerate() {
+            let Some(pr) = PreparedRay::new(ray) else { continue };
+            let Some(gr) = geom.clip(&pr) else { continue };
+            // The flat walk, each run of cells in empty blocks cut to its first cell, and the
+            // count: the cells kept plus the further blocks of each run.
+            let mut want = Vec::new();
+            let (mut count, mut run_block) = (0u32, None);
+            for s in Walker::new(Traversal::AmanatidesWoo, &gr, geom.res) {
+                let b = s.cell >> log2;
+                if !block_empty(b) {
+                    run_block = None;
+                } else if run_block.is_some() {
+                    if run_block != Some(b) {
+                        count += 1;
+                        run_block = Some(b);
+                    }
+                    continue;
+                } else {
+                    run_block = Some(b);
+                    skipped_runs += 1;
+                }
+                want.push((s.cell, geom.cell_index(s.cell), s.t_exit.to_bits()));
+                count += 1;
+            }
+            let mut got = Vec::new();
+            let (stopped, visits) = AmanatidesWoo::new(&gr, geom.res).walk_blocks(log2, block_empty, |c, a, t| {
+                got.push((c, a, t.to_bits()));
+                if block_empty(c >> log2) { Visit::LeaveBlock } else { Visit::Next }
+            });
+            assert!(!stopped);
+            assert_eq!(got, want, "grid {g} {res:?} edge {edge} ray {i}: {ray:?}");
+            assert_eq!(visits, count, "grid {g} {res:?} edge {edge} ray {i}: visits counted");
+            // Stopped at a visit: the same cells up to it.
+            let stop = i % want.len().max(1);
+            let mut seen = 0;
+            let (stopped, _) = AmanatidesWoo::new(&gr, geom.res).walk_blocks(log2, block_empty, |c, _, _| {
+                seen += 1;
+                if seen > stop {
+                    Visit::Stop
+                } else if block_empty(c >> log2) {
+                    Visit::LeaveBlock
+                } else {
+                    Visit::Next
+                }
+            });
+            assert_eq!(seen, (stop + 1).min(want.len()), "grid {g} ray {i}: early stop");
+            assert_eq!(stopped, stop < want.len(), "grid {g} ray {i}: stop reported");
+            compared += 1;
+        }
+    }
+    assert!(compared > 5_000 && skipped_runs > 2_000, "too few walks: {compared}, {skipped_runs} runs of empty blocks");
+}

@@ -1,0 +1,3 @@
+// The macrocell kernel's walk with the Liu walker: the nested walk (macro grid, then each
+// occupied macrocell's fine cells).
+//!include shared/macrocell_nested.wgsl
