@@ -9,7 +9,7 @@
 // skipping empty macrocells.
 fn test_box(lo: vec3<u32>, hi: vec3<u32>, own_lo: vec3<u32>, own_hi: vec3<u32>) {
     let a = params.macro_edge;
-    let macro_res = params.res / a;
+    let macro_res = macro_resolution();
     let mlo = max(lo, own_lo) / a;
     let mhi = min(hi, own_hi) / a;
     for (var mz = mlo.z; mz <= mhi.z; mz++) {

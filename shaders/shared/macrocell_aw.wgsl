@@ -43,14 +43,14 @@ fn walker_cross_blocks(w: ptr<function, Walker>, log2: u32) -> bool {
     let step = (*w).cur.step;
     let o = (*w).g.o;
     let inv_d = (*w).g.inv_d;
-    let res = (*w).cur.res >> vec3<u32>(log2);
+    let res = vec3<i32>(macro_resolution());
     var block = (*w).cur.cell >> vec3<u32>(log2);
     var wall = vec3<i32>(0);
     var t_max = vec3<f32>(inf());
     for (var a = 0u; a < 3u; a++) {
         if step[a] != 0 {
             let lo = block[a] << log2;
-            wall[a] = select(lo, lo + (1 << log2), step[a] > 0);
+            wall[a] = select(lo, min(lo + (1 << log2), (*w).cur.res[a]), step[a] > 0);
             t_max[a] = (f32(wall[a]) - o[a]) * inv_d[a];
         }
     }
@@ -66,7 +66,7 @@ fn walker_cross_blocks(w: ptr<function, Walker>, log2: u32) -> bool {
             (*w).cur.done = true;
             return false;
         }
-        wall[out] += step[out] << log2;
+        wall[out] = min(wall[out] + (step[out] << log2), (*w).cur.res[out]);
         t_max[out] = (f32(wall[out]) - o[out]) * inv_d[out];
         if !macrocell_empty(block) {
             for (var a = 0u; a < 3u; a++) {
@@ -90,7 +90,9 @@ fn walker_enter_block(w: ptr<function, Walker>, log2: u32, a: u32, b: i32, out: 
     }
     let o = (*w).g.o[a];
     let inv_d = (*w).g.inv_d[a];
-    var cell = select((b << log2) + (1 << log2) - 1, b << log2, step > 0);
+    // Moving down, a block is entered from above, so never the grid's last, cut-short one; the
+    // bound keeps the first cell in the grid regardless.
+    var cell = select(min((b << log2) + (1 << log2) - 1, (*w).cur.res[a] - 1), b << log2, step > 0);
     var wall = cell + select(0, 1, step > 0);
     if a != out {
         if ((*w).cur.cell[a] >> log2) == b {

@@ -11,7 +11,8 @@ fn walk_block(fine: GridRay, m: vec3<i32>, t_enter: f32, t_exit: f32) -> bool {
     sub.o = fine.o - vec3<f32>(lo);
     sub.t0 = t_enter;
     sub.t1 = t_exit;
-    var fw = walker_init(sub, vec3<u32>(a));
+    // A macrocell the grid's end cuts short has fewer fine cells (MacrocellGrid::block_res).
+    var fw = walker_init(sub, min(vec3<u32>(a), params.res - vec3<u32>(lo)));
     loop {
         if !walker_next(&fw) {
             return false;
@@ -34,7 +35,7 @@ fn walk_block(fine: GridRay, m: vec3<i32>, t_enter: f32, t_exit: f32) -> bool {
 // shared/closest_hit.wgsl).
 fn walk(fine: GridRay) {
     let af = f32(params.macro_edge);
-    let macro_res = params.res / params.macro_edge;
+    let macro_res = macro_resolution();
     // Exact: A is a power of two.
     var mg = fine;
     mg.o = fine.o / af;

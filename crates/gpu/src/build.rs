@@ -17,8 +17,7 @@ use gridrt_grid::build::{MAX_REFS, PhaseTimes, check_cells};
 use gridrt_grid::flat::WORD_CELLS;
 use gridrt_grid::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use gridrt_grid::macrocell::{
-    MACRO_SIZES, MacroSample, MacrocellGrid, PROBE_MULTIPLE, best_macro_size, check_macro_size, fine_resolution,
-    macro_resolution,
+    MACRO_SIZES, MacroSample, MacrocellGrid, best_macro_size, check_macro_size, macro_resolution,
 };
 use gridrt_grid::{
     AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, OccupancyWord, Resolution, ResolutionChoice, resolution,
@@ -141,8 +140,8 @@ impl GridBuilder {
         Ok(g)
     }
 
-    /// The occupancy bits of macrocells of edge `a` over `fine` (whose resolution is a multiple
-    /// of `a`), recorded into `enc`.
+    /// The occupancy bits of macrocells of edge `a` over `fine` (the last on an axis cut short
+    /// where the resolution is not a multiple of `a`), recorded into `enc`.
     fn occupancy(
         &self,
         ctx: &GpuContext,
@@ -166,8 +165,8 @@ impl GridBuilder {
         Ok((macro_res, bits))
     }
 
-    /// Macrocells over a fine grid at `res` rounded up to multiples of A: A as given, or chosen
-    /// by the cost model from a probe grid (as `MacrocellGrid::build` does on the CPU).
+    /// Macrocells over a fine grid at `res`: A as given, or chosen by the cost model from the
+    /// fine grid itself (as `MacrocellGrid::build` does on the CPU): one build whatever A.
     pub async fn macrocell_async(
         &self,
         ctx: &GpuContext,
@@ -176,40 +175,25 @@ impl GridBuilder {
         res: [u32; 3],
         a: Option<u32>,
     ) -> Result<GpuGrid, GpuError> {
-        let (a, samples, probe) = match a {
-            Some(a) => {
-                check_macro_size(a)?;
-                (a, Vec::new(), None)
-            }
+        if let Some(a) = a {
+            check_macro_size(a)?;
+        }
+        let mut fine = self.flat_async(ctx, scene, GridGeometry::new(bounds, res)).await?;
+        let (a, samples) = match a {
+            Some(a) => (a, Vec::new()),
             None => {
-                let probe = self
-                    .flat_async(ctx, scene, GridGeometry::new(bounds, fine_resolution(res, PROBE_MULTIPLE)))
-                    .await?;
                 let start = web_time::Instant::now();
                 let mut samples = Vec::new();
                 for a in MACRO_SIZES {
                     let mut enc = Self::encoder(ctx, "grid build: macrocell sample");
-                    let (macro_res, bits) = self.occupancy(ctx, &mut enc, &probe, a)?;
+                    let (macro_res, bits) = self.occupancy(ctx, &mut enc, &fine, a)?;
                     let words = bits.size() / WORD;
                     let occ = Self::submit_and_read(ctx, enc, &bits, 0, words, "the macrocell occupancy").await?;
                     samples.push(MacroSample::from_occupancy(a, macro_res, &occ));
                 }
-                let mut probe = probe;
-                probe.times.record_since("macro-size", start);
-                (best_macro_size(&samples), samples, Some(probe))
+                fine.times.record_since("macro-size", start);
+                (best_macro_size(&samples), samples)
             }
-        };
-        let target = fine_resolution(res, a);
-        let mut fine = match probe {
-            Some(f) if f.geom.res.to_array() == target => f,
-            Some(f) => {
-                let mut g = self.flat_async(ctx, scene, GridGeometry::new(bounds, target)).await?;
-                let mut t = f.times;
-                t.0.append(&mut g.times.0);
-                g.times = t;
-                g
-            }
-            None => self.flat_async(ctx, scene, GridGeometry::new(bounds, target)).await?,
         };
         let start = web_time::Instant::now();
         let mut enc = Self::encoder(ctx, "grid build: occupancy");

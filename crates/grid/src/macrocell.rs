@@ -1,10 +1,12 @@
 //! Macrocells (Parker et al. 1999): a coarse occupancy grid over A×A×A blocks of a flat grid.
 //!
-//! The ray walks the macro grid first; an empty macrocell is crossed in one step, and only
-//! inside an occupied one does it walk the fine cells of that block. The fine grid's resolution
-//! is rounded up to a multiple of A on every axis, so macrocell boundaries are exactly fine-cell
-//! boundaries; A is a power of two, so the macro grid-space ray is the fine one scaled by 1/A
-//! without rounding.
+//! An empty macrocell is crossed in one step, and only inside an occupied one does the ray walk
+//! fine cells. Macrocells start at multiples of A fine cells (the fine grid keeps the resolution
+//! it is given; the last macrocell on an axis may be cut short by the grid's end), so their walls
+//! are fine walls; A is a power of two, so the macro grid-space ray is the fine one scaled by 1/A
+//! without rounding. With Amanatides–Woo the walk is one hierarchical DDA over the fine cells
+//! ([`AmanatidesWoo::walk_blocks`]); with the other walkers, the macro grid's walk and in each
+//! occupied macrocell a walk of its fine cells.
 //!
 //! # Layout (GPU-ready: flat arrays, indices only)
 //! - the fine grid, a [`FlatGrid`] (occupancy words, an offset per occupied cell, `refs`; the
@@ -15,8 +17,10 @@
 //! # Choosing A
 //! By default A is chosen by the cost model: a ray crossing m fine cells crosses about m/A
 //! macrocells and, in the fraction f_A of them that is occupied, about A fine cells each, so the
-//! stepping cost is ≈ (m/A + f_A·m)·Tstep (the intersection term does not depend on A). f_A is
-//! counted exactly for A ∈ {2, 4, 8, 16}; the A minimising 1/A + f_A wins.
+//! stepping cost is ≈ (m/A + W·f_A·m)·Tstep (the intersection term does not depend on A), where
+//! a fine cell's step in an occupied macrocell weighs W = [`FINE_STEP_WEIGHT`] macrocell steps:
+//! it reads the fine and the macro occupancy bits, a macrocell's step only the macro ones. f_A is
+//! counted exactly on the fine grid for A ∈ {2, 4, 8, 16}; the A minimising 1/A + W·f_A wins.
 
 use glam::{UVec3, Vec3};
 use gridrt_scene::{Aabb, Hit, Ray};
@@ -24,13 +28,20 @@ use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
 use crate::build::{BuildOptions, PhaseTimes};
-use crate::flat::FlatGrid;
+use crate::flat::{FlatGrid, WORD_CELLS};
 use crate::geometry::{GridGeometry, GridRay, linear_index};
 use crate::stats::RayStats;
 use crate::trace::TraceOptions;
 use crate::trace::closest_hit::{ClosestHit, closest_hit};
 use crate::traversal::amanatides_woo::AmanatidesWoo;
 use crate::traversal::{Traversal, Visit, walk_counted};
+
+/// What a fine cell's step in an occupied macrocell costs in macrocell steps, for the choice of
+/// A (see the module doc). Measured (2026-12-05, one thread): with 1, the bunny's grid chose
+/// A = 8, 0.91× the speed of A = 4 on camera rays (the engine's 8 too, within noise of 4); with
+/// 1.25 the bunny, igea, the dragon, the armadillo, the engine and Sponza get 4 and the teapot 2,
+/// each the fastest of a sweep over 2 to 16 or within 4% of it.
+pub const FINE_STEP_WEIGHT: f64 = 1.25;
 
 /// Macrocell sizes the cost model chooses among.
 pub const MACRO_SIZES: [u32; 4] = [2, 4, 8, 16];
@@ -52,13 +63,14 @@ pub struct MacroSample {
     pub a: u32,
     pub macro_cells: u64,
     pub occupied: u64,
-    /// 1/A + f_A: the relative stepping cost the choice minimises.
+    /// 1/A + W·f_A: the relative stepping cost the choice minimises.
     pub cost: f64,
 }
 
 impl MacrocellGrid {
-    /// Builds the fine grid at `res` (rounded up to multiples of A) and the macro occupancy.
-    /// `a = None` lets the cost model choose A (see the module doc). `bounds`: of `tris`.
+    /// Builds the fine grid at `res` and the macro occupancy. `a = None` lets the cost model
+    /// choose A (see the module doc) from the fine grid itself: one build whatever A.
+    /// `bounds`: of `tris`.
     pub fn build(
         tris: &[[Vec3; 3]],
         bounds: &Aabb,
@@ -67,33 +79,29 @@ impl MacrocellGrid {
         opts: BuildOptions,
         times: &mut PhaseTimes,
     ) -> Result<(MacrocellGrid, Vec<MacroSample>), BuildError> {
-        let build_fine =
-            |res: [u32; 3], times: &mut PhaseTimes| FlatGrid::build(tris, GridGeometry::new(bounds, res), opts, times);
-        let (a, samples, probe) = match a {
+        if let Some(a) = a {
+            check_macro_size(a)?;
+        }
+        let fine = FlatGrid::build(tris, GridGeometry::new(bounds, res), opts, times)?;
+        let (a, samples, (macro_res, occupancy)) = match a {
             Some(a) => {
-                check_macro_size(a)?;
-                (a, Vec::new(), None)
+                let mut bits = times.record("occupancy", || occupancies(&fine, &[a]));
+                (a, Vec::new(), bits.remove(0))
             }
-            None => {
-                // Occupancy of each candidate A, from a fine grid at a resolution divisible by 16
-                // (and so by every candidate).
-                let fine = build_fine(fine_resolution(res, PROBE_MULTIPLE), times)?;
-                let samples: Vec<MacroSample> =
-                    times.record("macro-size", || MACRO_SIZES.iter().map(|&a| sample(&fine, a)).collect());
-                (best_macro_size(&samples), samples, Some(fine))
-            }
+            None => times.record("macro-size", || {
+                // Every candidate's bits in one pass; the chosen one's are kept.
+                let mut bits = occupancies(&fine, &MACRO_SIZES);
+                let samples: Vec<MacroSample> = MACRO_SIZES
+                    .iter()
+                    .zip(&bits)
+                    .map(|(&a, (macro_res, occ))| MacroSample::from_occupancy(a, *macro_res, occ))
+                    .collect();
+                let a = best_macro_size(&samples);
+                let chosen = MACRO_SIZES.iter().position(|&c| c == a).expect("a candidate");
+                (a, samples, bits.swap_remove(chosen))
+            }),
         };
-        // The probe is the final fine grid when rounding to A gives the same resolution.
-        let target = fine_resolution(res, a);
-        let fine = match probe {
-            Some(f) if f.geom.res.to_array() == target => f,
-            _ => build_fine(target, times)?,
-        };
-        let grid = times.record("occupancy", || {
-            let (macro_res, occupancy) = occupancy(&fine, a);
-            MacrocellGrid { fine, a, macro_res, occupancy }
-        });
-        Ok((grid, samples))
+        Ok((MacrocellGrid { fine, a, macro_res, occupancy }, samples))
     }
 
     pub fn memory_bytes(&self) -> u64 {
@@ -185,6 +193,13 @@ impl MacrocellGrid {
         (lo, GridRay { o: fine_ray.o - lo.as_vec3(), t0, t1, ..*fine_ray })
     }
 
+    /// The fine cells of the macrocell whose first fine cell is `lo`: A on every axis, fewer
+    /// in the last macrocell of an axis the grid's end cuts short.
+    #[inline]
+    pub fn block_res(&self, lo: UVec3) -> UVec3 {
+        UVec3::splat(self.a).min(self.fine.geom.res - lo)
+    }
+
     /// Walks the fine cells of macrocell `m` along `fine_ray` over `[t0, t1]`; true when the
     /// search is done.
     #[inline(never)]
@@ -199,16 +214,13 @@ impl MacrocellGrid {
     ) -> bool {
         let (lo, sub) = self.block_ray(m, fine_ray, t0, t1);
         let fine = &self.fine;
-        let (done, cells) = walk_counted(traversal, &sub, UVec3::splat(self.a), |c, _, t_exit| {
+        let (done, cells) = walk_counted(traversal, &sub, self.block_res(lo), |c, _, t_exit| {
             fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
         });
         search.visit_cells(cells);
         done
     }
 }
-
-/// The probe grid's resolution is a multiple of this (and so of every candidate A).
-pub const PROBE_MULTIPLE: u32 = 16;
 
 /// Refuses a macrocell size that is not a power of two ≤ 64.
 pub fn check_macro_size(a: u32) -> Result<(), BuildError> {
@@ -218,12 +230,8 @@ pub fn check_macro_size(a: u32) -> Result<(), BuildError> {
     Ok(())
 }
 
-/// The fine resolution for macrocells of edge `a`: `res` rounded up to multiples of `a`.
-pub fn fine_resolution(res: [u32; 3], a: u32) -> [u32; 3] {
-    res.map(|r| r.max(1).div_ceil(a) * a)
-}
-
-/// The macro grid over a fine grid of `res` (a multiple of `a`).
+/// The macro grid over a fine grid of `res`: macrocells of edge `a` from the origin, the last on
+/// an axis cut short where `res` is not a multiple of `a`.
 pub fn macro_resolution(res: UVec3, a: u32) -> UVec3 {
     UVec3::new(res.x.div_ceil(a), res.y.div_ceil(a), res.z.div_ceil(a))
 }
@@ -238,33 +246,34 @@ impl MacroSample {
     pub fn from_occupancy(a: u32, macro_res: UVec3, occupancy: &[u32]) -> MacroSample {
         let cells = macro_res.x as u64 * macro_res.y as u64 * macro_res.z as u64;
         let occupied: u64 = occupancy.iter().map(|w| w.count_ones() as u64).sum();
-        MacroSample { a, macro_cells: cells, occupied, cost: 1.0 / a as f64 + occupied as f64 / cells as f64 }
+        let f = occupied as f64 / cells as f64;
+        MacroSample { a, macro_cells: cells, occupied, cost: 1.0 / a as f64 + FINE_STEP_WEIGHT * f }
     }
 }
 
-fn sample(fine: &FlatGrid, a: u32) -> MacroSample {
-    let (macro_res, occ) = occupancy(fine, a);
-    MacroSample::from_occupancy(a, macro_res, &occ)
-}
-
-/// Macro resolution and occupancy bits of a fine grid whose resolution is a multiple of `a`.
-fn occupancy(fine: &FlatGrid, a: u32) -> (UVec3, Vec<u32>) {
+/// Macro resolution and occupancy bits of a fine grid for macrocells of each edge in `sizes`, in
+/// one pass over its occupied cells (found from its occupancy words: most cells are empty).
+fn occupancies(fine: &FlatGrid, sizes: &[u32]) -> Vec<(UVec3, Vec<u32>)> {
     let res = fine.geom.res;
-    let macro_res = macro_resolution(res, a);
-    let n = macro_res.x as usize * macro_res.y as usize * macro_res.z as usize;
-    let mut occupancy = vec![0u32; n.div_ceil(32)];
-    for z in 0..res.z {
-        for y in 0..res.y {
-            for x in 0..res.x {
-                let c = UVec3::new(x, y, z);
-                let i = fine.geom.cell_index(c);
-                if fine.is_occupied(i) {
-                    let m = c / a;
-                    let k = linear_index(m, macro_res);
-                    occupancy[k / 32] |= 1 << (k % 32);
-                }
+    let mut out: Vec<(UVec3, Vec<u32>)> = sizes
+        .iter()
+        .map(|&a| {
+            let m = macro_resolution(res, a);
+            (m, vec![0u32; (m.x as usize * m.y as usize * m.z as usize).div_ceil(32)])
+        })
+        .collect();
+    let (rx, rxy) = (res.x as usize, res.x as usize * res.y as usize);
+    for (w, word) in fine.occupied.iter().enumerate() {
+        let mut bits = word.bits;
+        while bits != 0 {
+            let i = w * WORD_CELLS + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let c = UVec3::new((i % rx) as u32, ((i % rxy) / rx) as u32, (i / rxy) as u32);
+            for (&a, (macro_res, occ)) in sizes.iter().zip(&mut out) {
+                let k = linear_index(c / a, *macro_res);
+                occ[k / 32] |= 1 << (k % 32);
             }
         }
     }
-    (macro_res, occupancy)
+    out
 }

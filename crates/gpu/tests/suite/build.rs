@@ -92,7 +92,7 @@ fn gpu_build_of_shared_scenes_at_auto_resolution() {
 }
 
 /// Through the whole pipeline (bounds, resolution choice, build): flat and macrocell grids
-/// (A given, and A chosen by the cost model from a probe grid) equal the CPU's, digests
+/// (A given, and A chosen by the cost model from the fine grid) equal the CPU's, digests
 /// included; other kinds and exact insertion are refused with a message.
 #[test]
 fn gpu_build_of_every_supported_configuration_equals_the_cpu() {

@@ -197,7 +197,8 @@ impl LinearWalk {
     }
 
     /// From the current cell, whose block of 2^`log2` cells per edge is empty (blocks are
-    /// aligned to multiples of the edge and tile the grid): walks the grid of blocks to the
+    /// aligned to multiples of the edge and tile the grid; the last on an axis may be cut short
+    /// by the grid's end, its far wall then the grid's): walks the grid of blocks to the
     /// first one that `empty_block(block)` says is not, and sets this walk at the cell, walls
     /// and crossings the cell-by-cell walk reaches there; each empty block entered after the
     /// current one adds 1 to `crossed`. False when the walk ends first (the segment ends, or the
@@ -214,7 +215,7 @@ impl LinearWalk {
     /// order and their exits are the flat walk's.
     #[inline]
     pub fn cross_blocks(&mut self, log2: u32, empty_block: impl Fn(UVec3) -> bool, crossed: &mut u32) -> bool {
-        let res = self.res >> log2;
+        let res = (self.res + IVec3::splat((1 << log2) - 1)) >> log2;
         let mut block = self.cell >> log2;
         let [(wx, tx), (wy, ty), (wz, tz)] =
             [self.block_exit::<0>(log2), self.block_exit::<1>(log2), self.block_exit::<2>(log2)];
@@ -227,7 +228,7 @@ impl LinearWalk {
                     self.done = true;
                     return false;
                 }
-                wall.$axis += self.step.$axis << log2;
+                wall.$axis = (wall.$axis + (self.step.$axis << log2)).min(self.res.$axis);
                 t_max.$axis = (wall.$axis as f32 - self.o.$axis) * self.inv_d.$axis;
             }};
         }
@@ -258,8 +259,8 @@ impl LinearWalk {
         }
     }
 
-    /// Axis `A`'s first wall beyond the current cell's block of 2^`log2` cells per edge, and
-    /// its crossing (never, on an axis the ray does not move along).
+    /// Axis `A`'s first wall beyond the current cell's block of 2^`log2` cells per edge (at
+    /// most the grid's end), and its crossing (never, on an axis the ray does not move along).
     #[inline(always)]
     fn block_exit<const A: usize>(&self, log2: u32) -> (i32, f32) {
         let step = self.step[A];
@@ -267,7 +268,7 @@ impl LinearWalk {
             return (0, f32::INFINITY);
         }
         let lo = (self.cell[A] >> log2) << log2;
-        let wall = if step > 0 { lo + (1 << log2) } else { lo };
+        let wall = if step > 0 { (lo + (1 << log2)).min(self.res[A]) } else { lo };
         (wall, (wall as f32 - self.o[A]) * self.inv_d[A])
     }
 
@@ -284,7 +285,9 @@ impl LinearWalk {
         if step == 0 {
             return;
         }
-        let first = if step > 0 { b << log2 } else { (b << log2) + (1 << log2) - 1 };
+        // Moving down, a block is entered from above, so never the grid's last, cut-short one;
+        // the bound keeps the first cell in the grid regardless.
+        let first = if step > 0 { b << log2 } else { ((b << log2) + (1 << log2) - 1).min(self.res[A] - 1) };
         let (mut cell, mut wall) = (first, first + (step > 0) as i32);
         if A != out {
             if self.cell[A] >> log2 == b {
