@@ -123,13 +123,13 @@ impl MacrocellGrid {
         self.occupancy.iter().map(|w| w.count_ones() as u64).sum()
     }
 
-    /// Closest hit. Amanatides–Woo: one walk of the fine cells that leaves an empty macrocell
-    /// in one jump ([`AmanatidesWoo::walk_blocks`]); the other walkers: the macro walk, and a
-    /// walk of the fine cells inside each occupied macrocell.
+    /// Closest hit. Amanatides–Woo: one walk of the fine cells that crosses empty macrocells on
+    /// the macro grid's walk ([`AmanatidesWoo::walk_blocks`]); the other walkers: the macro walk,
+    /// and a walk of the fine cells inside each occupied macrocell.
     pub fn trace(&self, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
         let traversal = opts.traversal;
         if traversal == Traversal::AmanatidesWoo {
-            let r = closest_hit(tris, ray, opts, |search| {
+            return closest_hit(tris, ray, opts, |search| {
                 let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
                 let walk = AmanatidesWoo::new(&fine_ray, self.fine.geom.res);
                 let empty = |m: UVec3| !self.occupied(m);
@@ -137,7 +137,6 @@ impl MacrocellGrid {
                     walk.walk_blocks(self.log2_edge(), empty, |c, index, t_exit| self.visit(search, c, index, t_exit));
                 search.visit_cells(cells);
             });
-            return r;
         }
         closest_hit(tris, ray, opts, |search| {
             let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
