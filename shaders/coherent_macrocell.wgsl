@@ -9,15 +9,13 @@
 // skipping empty macrocells.
 fn test_box(lo: vec3<u32>, hi: vec3<u32>, own_lo: vec3<u32>, own_hi: vec3<u32>) {
     let a = params.macro_edge;
-    let macro_res = macro_resolution();
     let mlo = max(lo, own_lo) / a;
     let mhi = min(hi, own_hi) / a;
     for (var mz = mlo.z; mz <= mhi.z; mz++) {
         for (var my = mlo.y; my <= mhi.y; my++) {
             for (var mx = mlo.x; mx <= mhi.x; mx++) {
                 let m = vec3<u32>(mx, my, mz);
-                let mi = m.x + macro_res.x * (m.y + macro_res.y * m.z);
-                if (occupancy[mi / 32u] & (1u << (mi % 32u))) != 0u {
+                if !macrocell_empty(vec3<i32>(m)) {
                     test_cells(max(m * a, lo), min(m * a + vec3<u32>(a - 1u), hi), own_lo, own_hi);
                 }
             }

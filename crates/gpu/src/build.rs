@@ -17,7 +17,7 @@ use gridrt_grid::build::{MAX_REFS, PhaseTimes, check_cells};
 use gridrt_grid::flat::WORD_CELLS;
 use gridrt_grid::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use gridrt_grid::macrocell::{
-    MACRO_SIZES, MacroSample, MacrocellGrid, best_macro_size, check_macro_size, macro_resolution,
+    MACRO_SIZES, MacroSample, MacrocellGrid, best_macro_sample, check_macro_size, macro_resolution,
 };
 use gridrt_grid::{
     AnyGrid, FlatGrid, GridConfig, GridKind, InsertMode, OccupancyWord, Resolution, ResolutionChoice, resolution,
@@ -179,28 +179,34 @@ impl GridBuilder {
             check_macro_size(a)?;
         }
         let mut fine = self.flat_async(ctx, scene, GridGeometry::new(bounds, res)).await?;
-        let (a, samples) = match a {
-            Some(a) => (a, Vec::new()),
+        let (a, samples, (macro_res, bits)) = match a {
+            Some(a) => {
+                let start = web_time::Instant::now();
+                let mut enc = Self::encoder(ctx, "grid build: occupancy");
+                let occupancy = self.occupancy(ctx, &mut enc, &fine, a)?;
+                ctx.queue.submit([enc.finish()]);
+                wait(ctx)?;
+                fine.times.record_since("occupancy", start);
+                (a, Vec::new(), occupancy)
+            }
             None => {
+                // Every candidate's bits, read back for its sample; the chosen one's are kept.
                 let start = web_time::Instant::now();
                 let mut samples = Vec::new();
+                let mut candidates = Vec::new();
                 for a in MACRO_SIZES {
                     let mut enc = Self::encoder(ctx, "grid build: macrocell sample");
                     let (macro_res, bits) = self.occupancy(ctx, &mut enc, &fine, a)?;
                     let words = bits.size() / WORD;
                     let occ = Self::submit_and_read(ctx, enc, &bits, 0, words, "the macrocell occupancy").await?;
                     samples.push(MacroSample::from_occupancy(a, macro_res, &occ));
+                    candidates.push((macro_res, bits));
                 }
                 fine.times.record_since("macro-size", start);
-                (best_macro_size(&samples), samples)
+                let chosen = best_macro_sample(&samples);
+                (samples[chosen].a, samples, candidates.swap_remove(chosen))
             }
         };
-        let start = web_time::Instant::now();
-        let mut enc = Self::encoder(ctx, "grid build: occupancy");
-        let (macro_res, bits) = self.occupancy(ctx, &mut enc, &fine, a)?;
-        ctx.queue.submit([enc.finish()]);
-        wait(ctx)?;
-        fine.times.record_since("occupancy", start);
         fine.structure.kind = GridKind::Macrocell;
         fine.structure.params.macro_edge = a;
         fine.structure.bytes += bits.size();

@@ -96,9 +96,8 @@ impl MacrocellGrid {
                     .zip(&bits)
                     .map(|(&a, (macro_res, occ))| MacroSample::from_occupancy(a, *macro_res, occ))
                     .collect();
-                let a = best_macro_size(&samples);
-                let chosen = MACRO_SIZES.iter().position(|&c| c == a).expect("a candidate");
-                (a, samples, bits.swap_remove(chosen))
+                let chosen = best_macro_sample(&samples);
+                (samples[chosen].a, samples, bits.swap_remove(chosen))
             }),
         };
         Ok((MacrocellGrid { fine, a, macro_res, occupancy }, samples))
@@ -235,9 +234,9 @@ pub fn macro_resolution(res: UVec3, a: u32) -> UVec3 {
     UVec3::new(res.x.div_ceil(a), res.y.div_ceil(a), res.z.div_ceil(a))
 }
 
-/// The A whose sample costs least.
-pub fn best_macro_size(samples: &[MacroSample]) -> u32 {
-    samples.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)).map_or(MACRO_SIZES[0], |s| s.a)
+/// The index of the sample that costs least (of a non-empty list, e.g. one per [`MACRO_SIZES`]).
+pub fn best_macro_sample(samples: &[MacroSample]) -> usize {
+    (0..samples.len()).min_by(|&x, &y| samples[x].cost.total_cmp(&samples[y].cost)).expect("samples")
 }
 
 impl MacroSample {
