@@ -7,7 +7,7 @@
 
 use serde::Serialize;
 
-use super::scaling::{ScalePoint, slope, slope_in_refs};
+use super::scaling::{ScalePoint, slope, slope_in_refs, slope_of_first};
 use super::{AutoPoint, Row};
 use crate::lab::report::print_table;
 use crate::lab::views::RaySet;
@@ -70,6 +70,9 @@ pub fn evaluate(rows: &[Row], auto: &[AutoPoint], scale: &[ScalePoint]) -> Vec<T
     ] {
         if let Some(k) = slope(scale, scene, "flat") {
             push("flat build: log–log slope of time against N", label, k, "≤ 1.05", k <= 1.05);
+        }
+        if let Some(k) = slope_of_first(scale, scene, "flat") {
+            push("flat build: log–log slope of the first build (fresh memory) against N", label, k, "(reported)", true);
         }
         if let Some(k) = slope_in_refs(scale, scene, "flat") {
             push("flat build: log–log slope of time against references", label, k, "(reported)", true);
