@@ -32,8 +32,10 @@ fn begin_ray(i: u32) -> bool {
     if !ray.valid {
         return false;
     }
-    top_ray = clip_ray((ray.org - params.grid_min.xyz) * params.inv_cell.xyz, ray.dir * params.inv_cell.xyz, params.res,
-                       ray.tmin, ray.tmax);
+    // In the walk's units (PreparedRay.t_scale), as on the CPU (GridGeometry::clip).
+    top_ray = clip_ray((ray.org - params.grid_min.xyz) * params.inv_cell.xyz,
+                       (ray.dir * (1.0 / ray.t_scale)) * params.inv_cell.xyz, params.res,
+                       ray.tmin * ray.t_scale, ray.tmax * ray.t_scale);
     return !ray_is_empty(top_ray);
 }
 
@@ -62,9 +64,10 @@ fn test_cell(first: u32, end: u32, t_exit: f32) -> bool {
     return done_at(t_exit) || (params.query == QUERY_ANY && best.t < inf());
 }
 
-// True when the best hit lies before `t_exit` (the end of a cell or block just crossed).
+// True when the best hit lies before `t_exit` (the end of a cell or block just crossed, in the
+// walk's units).
 fn done_at(t_exit: f32) -> bool {
-    return best.t < t_exit;
+    return best.t * ray.t_scale < t_exit;
 }
 
 // Tests one referenced triangle, updating the best hit, the counters and the mailbox.

@@ -260,8 +260,9 @@ fn trace_packets(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         if j >= last || (params.query == QUERY_ANY && best.t < inf()) {
             walking = false;
         } else if best.t < inf() {
-            let s = g.o[axis] + g.d[axis] * best.t;
-            let m = slack(abs(g.o[axis]) + abs(g.d[axis] * best.t));
+            let best_t = best.t * ray.t_scale;
+            let s = g.o[axis] + g.d[axis] * best_t;
+            let m = slack(abs(g.o[axis]) + abs(g.d[axis] * best_t));
             walking = select(s - m <= far, s + m >= far, positive);
         }
     }

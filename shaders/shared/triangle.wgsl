@@ -52,7 +52,8 @@ fn intersect_triangle(r: PreparedRay, tri: u32) -> TriHit {
     let bz = r.sz * b[r.kz];
     let cz = r.sz * c[r.kz];
     let t = (u * az + v * bz + w * cz) / det;
-    if !(t >= r.tmin && t <= r.tmax && t < inf()) {
+    // A t that overflows f32 (either sign) is no hit (CPU: triangle.rs).
+    if !(t >= r.tmin && t <= r.tmax && abs(t) < inf()) {
         return out;
     }
     out.hit = true;

@@ -5,13 +5,16 @@
 
 const CW_SCALE: u32 = 1073741824u; // 2^30
 const CW_BEYOND: u32 = 1073741825u;
+const CW_UNIT: f32 = 9.313225746154785e-10; // 2^-30
 
 struct Walker {
     cur: Cursor,
     g: GridRay,
     dist: vec3<u32>,
     delta: vec3<u32>,
-    scale: f32,
+    // 1 / (t1 - t0): fixed-point units are this times 2^30 per unit of t, applied in two
+    // steps so that a segment shorter than 2^-98 (a huge direction) does not overflow them.
+    inv_seg: f32,
     // Output of walker_next.
     out_cell: vec3<i32>,
     out_t_exit: f32,
@@ -32,8 +35,8 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
     w.cur = cursor_start(g, res_u);
     w.g = g;
     let seg = g.t1 - g.t0;
-    w.scale = f32(CW_SCALE) * (1.0 / seg);
-    let single = seg != seg || seg <= 0.0 || !(w.scale < inf());
+    w.inv_seg = 1.0 / seg;
+    let single = seg != seg || seg <= 0.0 || !(w.inv_seg < inf());
     w.dist = vec3<u32>(CW_BEYOND);
     w.delta = vec3<u32>(CW_BEYOND);
     for (var a = 0u; a < 3u; a++) {
@@ -42,8 +45,8 @@ fn walker_init(g: GridRay, res_u: vec3<u32>) -> Walker {
             continue;
         }
         let t_cross = (cursor_wall(w.cur, a) - g.o[a]) * g.inv_d[a];
-        w.dist[a] = cw_to_fixed((t_cross - g.t0) * w.scale);
-        w.delta[a] = max(cw_to_fixed(abs(g.inv_d[a]) * w.scale), 1u);
+        w.dist[a] = cw_to_fixed(((t_cross - g.t0) * w.inv_seg) * f32(CW_SCALE));
+        w.delta[a] = max(cw_to_fixed((abs(g.inv_d[a]) * w.inv_seg) * f32(CW_SCALE)), 1u);
     }
     return w;
 }
@@ -56,7 +59,7 @@ fn walker_advance(w: ptr<function, Walker>) -> bool {
     if d >= CW_SCALE {
         (*w).out_t_exit = (*w).g.t1;
     } else {
-        (*w).out_t_exit = (*w).g.t0 + f32(d) / (*w).scale;
+        (*w).out_t_exit = (*w).g.t0 + (f32(d) * CW_UNIT) / (*w).inv_seg;
     }
     if d > CW_SCALE {
         (*w).cur.done = true;

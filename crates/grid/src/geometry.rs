@@ -84,10 +84,11 @@ impl GridGeometry {
     }
 
     /// The ray in grid space clipped to the grid box and to `[tmin, tmax]`, or `None` when the
-    /// segment misses the grid.
+    /// segment misses the grid; its `t` in the walk's units ([`PreparedRay::walk_t`]).
     #[inline]
     pub fn clip(&self, r: &PreparedRay) -> Option<GridRay> {
-        GridRay::clipped((r.org - self.min) * self.inv_cell, r.dir * self.inv_cell, self.res, r.tmin, r.tmax)
+        let (tmin, tmax) = (r.walk_t(r.tmin), r.walk_t(r.tmax));
+        GridRay::clipped((r.org - self.min) * self.inv_cell, r.walk_dir() * self.inv_cell, self.res, tmin, tmax)
     }
 }
 

@@ -1,6 +1,12 @@
 //! A ray prepared once for the watertight triangle test (shaders/shared/ray.wgsl's
 //! `PreparedRay`): the dominant direction axis, the shear, and the checks that refuse rays no
 //! triangle can be hit by. Every structure and the brute-force reference start from it.
+//!
+//! A structure walks its cells along the ray in units of `t` ("walk units"), which are the
+//! ray's own unless its direction is huge: a direction beyond 2^64 (per component) would
+//! overflow f32 in grid space (1e30 over cells of 1e-9 is 1e39 cells per unit of `t`), so the
+//! walk takes it scaled down by a power of two, `t_scale`, and its `t` scaled up alike (both
+//! exact). The triangle test keeps the ray as given, so hits stay bit for bit brute force's.
 
 use glam::Vec3;
 use gridrt_scene::Ray;
@@ -20,6 +26,34 @@ pub struct PreparedRay {
     pub sz: f32,
     /// The origin's components in the order kx, ky, kz.
     pub org_k: [f32; 3],
+    /// A power of two ≥ 1: the walk's `t` per unit of the ray's (see the module doc).
+    pub t_scale: f32,
+}
+
+/// The largest direction component a walk takes as given (2^64): grid space then stays within
+/// f32 for cells down to 2^-60 of a unit.
+const WALK_DIR_MAX: f32 = 18446744073709551616.0;
+
+impl PreparedRay {
+    /// The direction the walks take: `dir / t_scale` (exact, a power of two).
+    #[inline(always)]
+    pub fn walk_dir(&self) -> Vec3 {
+        self.dir * (1.0 / self.t_scale)
+    }
+
+    /// The ray's `t` in the walk's units (exact; an overflow to ±inf only widens a bound).
+    #[inline(always)]
+    pub fn walk_t(&self, t: f32) -> f32 {
+        t * self.t_scale
+    }
+}
+
+/// [`PreparedRay::t_scale`] for direction `dir` (finite): 1 unless its largest component `m`
+/// is 2^64 or more, else the power of two that brings `m` into [2^63, 2^64).
+#[inline(always)]
+fn walk_scale(dir: Vec3) -> f32 {
+    let m = dir.abs().max_element();
+    if m < WALK_DIR_MAX { 1.0 } else { f32::from_bits(((m.to_bits() >> 23) - 63) << 23) }
 }
 
 impl PreparedRay {
@@ -61,6 +95,7 @@ impl PreparedRay {
             sy: d[ky % 3] * sz,
             sz,
             org_k: [o[kx % 3], o[ky % 3], o[kz % 3]],
+            t_scale: walk_scale(dir),
         })
     }
 }

@@ -93,7 +93,9 @@ fn intersect_with<const PREFILTER: bool>(r: &PreparedRay, tri: &[Vec3; 3]) -> Op
     let bz = (r.sz * bz) as f64;
     let cz = (r.sz * cz) as f64;
     let t = ((u * az + v * bz + w * cz) / det) as f32;
-    if !(t >= r.tmin && t <= r.tmax && t < f32::INFINITY) {
+    // A t that overflows f32 (either sign: a ray with tmin = -inf and a tiny direction meets a
+    // triangle behind it "at -inf") is no hit.
+    if !(t >= r.tmin && t <= r.tmax && t.is_finite()) {
         return None;
     }
     Some(TriHit { t, u: (v / det) as f32, v: (w / det) as f32 })

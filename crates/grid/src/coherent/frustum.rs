@@ -60,6 +60,12 @@ impl Lane {
         last: 0,
     };
 
+    /// The ray's `t` in its walk's units (those of the lane's line; [`PreparedRay::walk_t`]).
+    #[inline]
+    fn walk_t(&self, t: f32) -> f32 {
+        self.ray.map_or(t, |r| r.walk_t(t))
+    }
+
     /// Whether the walk has reached the ray's first slice at step `j`.
     #[inline]
     pub fn started(&self, j: u32) -> bool {
@@ -182,7 +188,8 @@ impl SliceWalk {
                     // Camera and shadow rays of a tile have similar lengths: a plain sum.
                     (0..3).for_each(|k| mean[k] += d[k]);
                     if ends.0.is_none() {
-                        let end = (r.tmax.is_finite()).then(|| std::array::from_fn(|k| o[k] + d[k] * r.tmax as f64));
+                        let tmax = ray.walk_t(r.tmax);
+                        let end = (tmax.is_finite()).then(|| std::array::from_fn(|k| o[k] + d[k] * tmax as f64));
                         ends = (Some(o), end);
                     }
                     Lane { ray: Some(ray), o, d, t0: g.t0, t1: g.t1, ..Lane::INVALID }
@@ -364,6 +371,7 @@ impl SliceWalk {
     /// its best hit at `best_t` (one slice early, to stay clear of rounding).
     #[inline]
     pub fn earliest_end(&self, lane: &Lane, best_t: f32) -> u32 {
+        let best_t = lane.walk_t(best_t);
         if !best_t.is_finite() {
             return lane.last;
         }
@@ -385,6 +393,6 @@ impl SliceWalk {
             return true;
         }
         let t_far = lane.t_at_0 + self.planes(j).1 * lane.t_per_cell;
-        (best_t as f64) < t_far
+        (lane.walk_t(best_t) as f64) < t_far
     }
 }

@@ -44,6 +44,9 @@ pub struct ClosestHit<'a> {
     /// The ray, prepared for the watertight triangle test.
     pub ray: PreparedRay,
     best: Hit,
+    /// The best hit's `t` in the walk's units ([`PreparedRay::walk_t`]), kept with it so that
+    /// the stop test at every cell is one comparison.
+    best_walk_t: f32,
     stats: RayStats,
     mailbox: Option<Mailbox>,
     /// [`Query::Any`]: done at the first hit.
@@ -121,17 +124,21 @@ impl<'a> ClosestHit<'a> {
             keep &= keep - 1;
             let t = &self.tris[tri as usize];
             let hit = if PREFILTER { intersect(&self.ray, t) } else { intersect_prefiltered(&self.ray, t) };
-            if keep_closer(&mut self.best, hit, tri) && self.any {
-                return true;
+            if keep_closer(&mut self.best, hit, tri) {
+                self.best_walk_t = self.ray.walk_t(self.best.t);
+                if self.any {
+                    return true;
+                }
             }
         }
         false
     }
 
-    /// True when the best hit lies before `t_exit` (the end of a cell or block just crossed).
+    /// True when the best hit lies before `t_exit` (the end of a cell or block just crossed, in
+    /// the walk's units: [`PreparedRay::walk_t`]).
     #[inline]
     pub fn done_at(&self, t_exit: f32) -> bool {
-        self.best.t < t_exit
+        self.best_walk_t < t_exit
     }
 }
 
@@ -181,6 +188,7 @@ impl<'a> ClosestHit<'a> {
             tris,
             ray: PreparedRay::new(ray)?,
             best: Hit::MISS,
+            best_walk_t: Hit::MISS.t,
             stats: RayStats::default(),
             mailbox: opts.mailbox.then(Mailbox::default),
             any: opts.query == Query::Any,

@@ -16,6 +16,8 @@ use crate::geometry::GridRay;
 
 /// Fixed-point length of the clipped segment.
 pub const SCALE: u32 = 1 << 30;
+/// One fixed-point unit, 2^-30 of the segment.
+const UNIT: f32 = 1.0 / SCALE as f32;
 /// "Beyond the segment": never reached by a crossing inside it.
 pub const BEYOND: u32 = SCALE + 1;
 
@@ -28,8 +30,11 @@ pub struct ClearyWyvill {
     delta: [u32; 3],
     t0: f32,
     t1: f32,
-    /// Fixed-point units per unit of `t`.
-    scale: f32,
+    /// `1 / (t1 − t0)`: the fixed-point units per unit of `t` are this times 2^30, applied in
+    /// two steps (equal to one product with `2^30 / seg` wherever that is finite, since scaling
+    /// by 2^30 is exact), so that a segment shorter than 2^-98 (a huge direction: 1e30 over a
+    /// unit grid) does not overflow them and turn the walk into its first cell.
+    inv_seg: f32,
 }
 
 impl ClearyWyvill {
@@ -37,9 +42,8 @@ impl ClearyWyvill {
         let mut cur = Cursor::start(ray, res);
         let c = cur.cell;
         let seg = ray.t1 - ray.t0;
-        // 2^30 · (1/seg) equals 2^30 / seg exactly, and is what the WGSL port computes.
-        let scale = SCALE as f32 * (1.0 / seg);
-        let single = seg.is_nan() || seg <= 0.0 || !scale.is_finite();
+        let inv_seg = 1.0 / seg;
+        let single = seg.is_nan() || seg <= 0.0 || !inv_seg.is_finite();
         let mut dist = [BEYOND; 3];
         let mut delta = [BEYOND; 3];
         for a in 0..3 {
@@ -48,11 +52,11 @@ impl ClearyWyvill {
                 continue;
             }
             let t_cross = (cur.wall(a) - ray.o[a]) * ray.inv_d[a];
-            dist[a] = to_fixed((t_cross - ray.t0) * scale);
-            delta[a] = to_fixed(ray.inv_d[a].abs() * scale).max(1);
+            dist[a] = to_fixed(((t_cross - ray.t0) * inv_seg) * SCALE as f32);
+            delta[a] = to_fixed((ray.inv_d[a].abs() * inv_seg) * SCALE as f32).max(1);
         }
         let stride = IVec3::new(1, res.x as i32, (res.x * res.y) as i32);
-        ClearyWyvill { cur, stride, address: c.dot(stride), dist, delta, t0: ray.t0, t1: ray.t1, scale }
+        ClearyWyvill { cur, stride, address: c.dot(stride), dist, delta, t0: ray.t0, t1: ray.t1, inv_seg }
     }
 
     /// The current cell and its exit; then the next crossing (the cursor is not done).
@@ -60,7 +64,7 @@ impl ClearyWyvill {
     pub(super) fn advance(&mut self) -> Option<CellStep> {
         let a = argmin3(self.dist);
         let d = self.dist[a];
-        let t_exit = if d >= SCALE { self.t1 } else { self.t0 + d as f32 / self.scale };
+        let t_exit = if d >= SCALE { self.t1 } else { self.t0 + (d as f32 * UNIT) / self.inv_seg };
         let out = CellStep { cell: self.cur.cell.as_uvec3(), t_exit };
         if d > SCALE {
             self.cur.done = true;

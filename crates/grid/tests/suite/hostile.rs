@@ -1,0 +1,205 @@
+//! Hostile geometry and rays, generated from seeds: scenes far from the origin or at extreme
+//! scales, coincident and degenerate triangles, triangles lying on cell walls, a huge triangle
+//! among tiny ones; rays starting on triangles and walls, running along walls, with subnormal
+//! or huge direction components and segments ending exactly at a hit. Every kind, insertion and
+//! exact traversal, single rays and packets, must equal brute force bit for bit.
+//! `GRIDRT_HOSTILE_SEEDS=N` runs N seeds (default 12).
+
+use glam::Vec3;
+use gridrt_grid::trace::TraceOptions;
+use gridrt_grid::{BuildOptions, GridConfig, GridKind, InsertMode, PacketOptions, Traversal, structure};
+use gridrt_scene::rng::Rng;
+use gridrt_scene::{Aabb, Camera, Ray};
+
+use super::common::{assert_same_hits, reference};
+
+/// A hostile scene of `seed`'s kind, and its name.
+fn scene(seed: u64) -> (String, Vec<[Vec3; 3]>) {
+    let mut rng = Rng::new(seed);
+    let mut tri = |c: Vec3, s: f32| [0, 1, 2].map(|_| c + (rng.unit_vector() * s));
+    let mut tris: Vec<[Vec3; 3]> = Vec::new();
+    let kind = seed % 6;
+    // A base cloud of small triangles in the unit cube.
+    let mut base = Rng::new(seed ^ 0x5eed);
+    for _ in 0..600 {
+        let c = Vec3::new(base.f32(), base.f32(), base.f32());
+        tris.push(tri(c, 0.03));
+    }
+    let name = match kind {
+        0 => {
+            // Far from the origin: f32 keeps ~7 digits, the cells are a few ulps wide.
+            for t in &mut tris {
+                *t = t.map(|p| p * 1e3 + Vec3::new(3.0e6, -2.5e6, 1.0e6));
+            }
+            "far from the origin"
+        }
+        1 => {
+            // Extreme scales, tiny and huge.
+            let s = [1e-18, 1e18, 1e-30, 1e30][(seed / 6 % 4) as usize];
+            for t in &mut tris {
+                *t = t.map(|p| p * s);
+            }
+            "extreme scale"
+        }
+        2 => {
+            // Coincident copies (ties in t, broken by the triangle index) and degenerate
+            // triangles (a repeated corner, collinear corners).
+            let n = tris.len();
+            for i in 0..n / 3 {
+                tris.push(tris[i * 3]);
+                let [a, b, _] = tris[i * 3 + 1];
+                tris.push([a, b, b]);
+                tris.push([a, (a + b) * 0.5, b]);
+            }
+            "coincident and degenerate"
+        }
+        3 => {
+            // Axis-aligned triangles on the planes of a lattice (cell walls at many
+            // resolutions: multiples of 1/64 of the unit cube).
+            for k in 0..400 {
+                let q = |v: f32| (v * 64.0).round() / 64.0;
+                let (a, u, v) = (k % 3, (k + 1) % 3, (k + 2) % 3);
+                let mut p = [Vec3::ZERO; 3];
+                let w = q(base.f32());
+                let (u0, v0) = (q(base.f32()), q(base.f32()));
+                for (j, c) in p.iter_mut().enumerate() {
+                    c[a] = w;
+                    c[u] = u0 + if j == 1 { 0.125 } else { 0.0 };
+                    c[v] = v0 + if j == 2 { 0.125 } else { 0.0 };
+                }
+                tris.push(p);
+            }
+            "on cell walls"
+        }
+        4 => {
+            // One huge triangle around tiny ones (the teapot in the stadium, far worse).
+            tris.push([Vec3::new(-1e5, -1e5, 0.5), Vec3::new(1e5, -1e5, 0.5), Vec3::new(0.0, 1e5, 0.5)]);
+            for t in &mut tris[..300] {
+                *t = t.map(|p| p * 1e-4 + Vec3::splat(0.5));
+            }
+            "huge among tiny"
+        }
+        _ => {
+            // Long slivers across the scene, nearly parallel to the axes.
+            for _ in 0..200 {
+                let a = Vec3::new(base.f32(), base.f32(), base.f32());
+                let axis = (base.below(3)) as usize;
+                let mut b = a;
+                b[axis] += 1.0;
+                let mut c = a;
+                c[(axis + 1) % 3] += 1e-6;
+                tris.push([a, b, c]);
+            }
+            "slivers"
+        }
+    };
+    (format!("seed {seed}: {name}"), tris)
+}
+
+/// Rays that probe the scene's edge cases: from its triangles' corners, centroids and edges,
+/// along lattice walls, with odd directions and segments ending at a hit.
+fn rays(tris: &[[Vec3; 3]], seed: u64, count: usize) -> Vec<Ray> {
+    let b = Aabb::from_points(tris.iter().flatten());
+    let mut rng = Rng::new(seed ^ 0xbad);
+    let ext = b.extent().max_element().max(f32::MIN_POSITIVE);
+    let odd_dir = |rng: &mut Rng| -> Vec3 {
+        let mut d = rng.unit_vector();
+        match rng.below(5) {
+            0 => d[rng.below(3) as usize] = 0.0,
+            1 => d[rng.below(3) as usize] = 1e-40, // subnormal
+            2 => d = Vec3::ZERO.with_x(1.0) * if rng.below(2) == 0 { 1.0 } else { -1.0 },
+            3 => d *= [1e30, 1e37, 3e38, 1e-30][rng.below(4) as usize],
+            _ => {}
+        }
+        d
+    };
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        let t = tris[rng.below(tris.len() as u64) as usize];
+        let o = match rng.below(5) {
+            0 => t[rng.below(3) as usize],
+            1 => (t[0] + t[1] + t[2]) / 3.0,
+            2 => t[0] + (t[1] - t[0]) * rng.f32(),
+            // On a lattice wall of the box (cells of most resolutions).
+            3 => {
+                let mut p = b.min + b.extent() * Vec3::new(rng.f32(), rng.f32(), rng.f32());
+                let a = rng.below(3) as usize;
+                p[a] = b.min[a] + b.extent()[a] * (rng.below(9) as f32 / 8.0);
+                p
+            }
+            _ => b.min - Vec3::splat(0.1 * ext) + (b.extent() + Vec3::splat(0.2 * ext)) * rng.f32(),
+        };
+        let d = odd_dir(&mut rng);
+        let (tmin, tmax) = match rng.below(4) {
+            0 => (0.0, f32::INFINITY),
+            1 => (-f32::INFINITY, f32::INFINITY),
+            2 => (0.0, ext / d.length().max(f32::MIN_POSITIVE) * rng.f32()),
+            _ => (1e-3 * ext / d.length().max(f32::MIN_POSITIVE), f32::INFINITY),
+        };
+        out.push(Ray::new(o, d, tmin, tmax));
+    }
+    // Segments that end exactly at their closest hit, and rays aimed at corners from outside.
+    let (hits, _) = reference(tris, &out);
+    let ends: Vec<Ray> = out.iter().zip(&hits).filter(|(_, h)| h.is_hit()).map(|(r, h)| r.ending_at(h.t)).collect();
+    out.extend(ends.into_iter().take(count / 4));
+    for _ in 0..count / 4 {
+        let t = tris[rng.below(tris.len() as u64) as usize];
+        let target = t[rng.below(3) as usize];
+        let o = target + rng.unit_vector() * ext;
+        out.push(Ray::new(o, target - o, 0.0, f32::INFINITY));
+    }
+    out
+}
+
+fn seeds() -> u64 {
+    std::env::var("GRIDRT_HOSTILE_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(12)
+}
+
+#[test]
+fn hostile_scenes_and_rays_equal_brute_force() {
+    for seed in 0..seeds() {
+        let (name, tris) = scene(seed);
+        let rays = rays(&tris, seed, 3000);
+        let (expected, stats) = reference(&tris, &rays);
+        println!("{name}: {} triangles, {} rays, {} hits", tris.len(), rays.len(), stats.hits);
+        for kind in GridKind::ALL {
+            for insert in InsertMode::ALL {
+                let cfg = GridConfig { kind, build: BuildOptions { insert, parallel: true }, ..GridConfig::default() };
+                let (grid, _) = structure::build(&tris, &cfg).unwrap_or_else(|e| panic!("{name} {kind}: {e}"));
+                for traversal in Traversal::EXACT {
+                    let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
+                    let (hits, _) = grid.trace_batch(&tris, &rays, opts, true);
+                    assert_same_hits(&format!("{name} {kind} {insert:?} {traversal}"), &rays, &expected, &hits);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn hostile_scenes_in_packets_equal_brute_force() {
+    for seed in 0..seeds() {
+        let (name, tris) = scene(seed);
+        let b = Aabb::from_points(tris.iter().flatten());
+        let (w, h) = (48, 40);
+        // The camera framing the scene, and one inside it looking along an axis (its rays run
+        // along the lattice's walls for some pixels).
+        let cams = [
+            Camera::fit(&b, w as f32 / h as f32),
+            Camera { eye: b.center(), target: b.center() + Vec3::X, up: Vec3::Y, vfov_deg: 60.0 },
+        ];
+        for cam in cams {
+            let rays = gridrt_scene::rays::image_rays(&cam, w, h);
+            let (expected, _) = reference(&tris, &rays);
+            for kind in GridKind::ALL {
+                let (grid, _) = structure::build(&tris, &GridConfig { kind, ..GridConfig::default() }).unwrap();
+                for tile in [4, 8] {
+                    let packets = PacketOptions { tile, mailbox: true };
+                    let (hits, _, _) =
+                        grid.trace_packets(&tris, &rays, w as usize, TraceOptions::MAILBOX, packets, true);
+                    assert_same_hits(&format!("{name} {kind} packets {tile}"), &rays, &expected, &hits);
+                }
+            }
+        }
+    }
+}
