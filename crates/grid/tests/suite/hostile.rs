@@ -2,16 +2,18 @@
 //! scales, coincident and degenerate triangles, triangles lying on cell walls, a huge triangle
 //! among tiny ones; rays starting on triangles and walls, running along walls, with subnormal
 //! or huge direction components and segments ending exactly at a hit. Every kind, insertion and
-//! exact traversal, single rays and packets, must equal brute force bit for bit.
+//! exact traversal, single rays, interleaved walks and packets, must equal brute force bit for
+//! bit (occlusion queries: whether each ray is occluded).
 //! `GRIDRT_HOSTILE_SEEDS=N` runs N seeds (default 12).
 
 use glam::Vec3;
-use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{BuildOptions, GridConfig, GridKind, InsertMode, PacketOptions, Traversal, structure};
+use gridrt_grid::trace::interleaved::trace_grid_interleaved;
+use gridrt_grid::trace::{Query, TraceOptions};
+use gridrt_grid::{AnyGrid, BuildOptions, GridConfig, GridKind, InsertMode, PacketOptions, Traversal, structure};
 use gridrt_scene::rng::Rng;
-use gridrt_scene::{Aabb, Camera, Ray};
+use gridrt_scene::{Aabb, Camera, Hit, Ray};
 
-use super::common::{assert_same_hits, reference};
+use super::common::{assert_same_hits, assert_same_occlusion, reference};
 
 /// A hostile scene of `seed`'s kind, and its name.
 fn scene(seed: u64) -> (String, Vec<[Vec3; 3]>) {
@@ -170,7 +172,26 @@ fn hostile_scenes_and_rays_equal_brute_force() {
                     let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
                     let (hits, _) = grid.trace_batch(&tris, &rays, opts, true);
                     assert_same_hits(&format!("{name} {kind} {insert:?} {traversal}"), &rays, &expected, &hits);
+                    let any = TraceOptions { query: Query::Any, ..opts };
+                    let (hits, _) = grid.trace_batch(&tris, &rays, any, true);
+                    assert_same_occlusion(
+                        &format!("{name} {kind} {insert:?} {traversal} any"),
+                        &tris,
+                        &rays,
+                        &expected,
+                        &hits,
+                    );
                 }
+                // The interleaved walks (which large grids and incoherent rays take), by themselves.
+                let mut hits = vec![Hit::MISS; rays.len()];
+                let opts = TraceOptions::MAILBOX;
+                match &grid {
+                    AnyGrid::Flat(f) => trace_grid_interleaved(f, &tris, &rays, &mut hits, opts),
+                    AnyGrid::Macrocell(m) => trace_grid_interleaved(m, &tris, &rays, &mut hits, opts),
+                    AnyGrid::Proximity(p) => trace_grid_interleaved(p, &tris, &rays, &mut hits, opts),
+                    _ => continue,
+                };
+                assert_same_hits(&format!("{name} {kind} {insert:?} interleaved"), &rays, &expected, &hits);
             }
         }
     }
@@ -198,6 +219,9 @@ fn hostile_scenes_in_packets_equal_brute_force() {
                     let (hits, _, _) =
                         grid.trace_packets(&tris, &rays, w as usize, TraceOptions::MAILBOX, packets, true);
                     assert_same_hits(&format!("{name} {kind} packets {tile}"), &rays, &expected, &hits);
+                    let any = TraceOptions { query: Query::Any, ..TraceOptions::MAILBOX };
+                    let (hits, _, _) = grid.trace_packets(&tris, &rays, w as usize, any, packets, true);
+                    assert_same_occlusion(&format!("{name} {kind} packets {tile} any"), &tris, &rays, &expected, &hits);
                 }
             }
         }
