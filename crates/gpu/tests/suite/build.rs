@@ -1,5 +1,6 @@
 //! The GPU grid build against the CPU's: the same bounds, and flat grids equal cell for cell and
-//! reference for reference, on generated scenes (huge, tiny, degenerate, far from the origin),
+//! reference for reference, on generated scenes (huge, tiny, degenerate, far from the origin,
+//! at scales 1e-18 and 1e29, on cell walls),
 //! at several resolutions (scan levels 1 to 3), and on the shared scenes; a GPU-built grid
 //! traces like the CPU-built one.
 
@@ -49,6 +50,25 @@ fn gpu_build_equals_the_cpu_build() {
         .collect();
     let mut degenerate = procedural::generate(SceneKind::Slivers, 2000, 6).mesh.triangles();
     degenerate.extend((0..200).map(|i| [Vec3::splat(i as f32 * 0.01); 3]));
+    let scaled = |s: f32| -> Vec<[Vec3; 3]> {
+        procedural::generate(SceneKind::Particles, 3000, 7).mesh.triangles().iter().map(|t| t.map(|p| p * s)).collect()
+    };
+    // Axis-aligned triangles on the planes of a 1/64 lattice of the unit cube (on cell walls
+    // at many resolutions).
+    let on_walls: Vec<[Vec3; 3]> = (0..3000u32)
+        .map(|k| {
+            let q = |i: u32| (i % 65) as f32 / 64.0;
+            let (a, u, v) = ((k % 3) as usize, ((k + 1) % 3) as usize, ((k + 2) % 3) as usize);
+            let (w, u0, v0) = (q(k.wrapping_mul(7919)), q(k.wrapping_mul(104_729)), q(k.wrapping_mul(1_299_709)));
+            [0, 1, 2].map(|j| {
+                let mut c = Vec3::ZERO;
+                c[a] = w;
+                c[u] = u0 + if j == 1 { 0.125 } else { 0.0 };
+                c[v] = v0 + if j == 2 { 0.125 } else { 0.0 };
+                c
+            })
+        })
+        .collect();
     let scenes = [
         ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh.triangles()),
         ("particles", procedural::generate(SceneKind::Particles, 40_000, 2).mesh.triangles()),
@@ -56,6 +76,9 @@ fn gpu_build_equals_the_cpu_build() {
         ("far from the origin", far),
         ("slivers and points", degenerate),
         ("one triangle", vec![[Vec3::ZERO, Vec3::X, Vec3::Y]]),
+        ("tiny (1e-18)", scaled(1e-18)),
+        ("huge (1e29)", scaled(1e29)),
+        ("on cell walls", on_walls),
     ];
     for (name, tris) in &scenes {
         // 1 cell; a scan of one block (4096 elements); two levels.
@@ -98,6 +121,25 @@ fn gpu_build_of_shared_scenes_at_auto_resolution() {
 fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
     let Some(ctx) = gpu() else { return };
     let builder = GridBuilder::new(ctx).unwrap();
+    let scaled = |s: f32| -> Vec<[Vec3; 3]> {
+        procedural::generate(SceneKind::Particles, 3000, 7).mesh.triangles().iter().map(|t| t.map(|p| p * s)).collect()
+    };
+    // Axis-aligned triangles on the planes of a 1/64 lattice of the unit cube (on cell walls
+    // at many resolutions).
+    let on_walls: Vec<[Vec3; 3]> = (0..3000u32)
+        .map(|k| {
+            let q = |i: u32| (i % 65) as f32 / 64.0;
+            let (a, u, v) = ((k % 3) as usize, ((k + 1) % 3) as usize, ((k + 2) % 3) as usize);
+            let (w, u0, v0) = (q(k.wrapping_mul(7919)), q(k.wrapping_mul(104_729)), q(k.wrapping_mul(1_299_709)));
+            [0, 1, 2].map(|j| {
+                let mut c = Vec3::ZERO;
+                c[a] = w;
+                c[u] = u0 + if j == 1 { 0.125 } else { 0.0 };
+                c[v] = v0 + if j == 2 { 0.125 } else { 0.0 };
+                c
+            })
+        })
+        .collect();
     let scenes = [
         ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh.triangles()),
         ("particles", procedural::generate(SceneKind::Particles, 30_000, 8).mesh.triangles()),
