@@ -143,6 +143,9 @@ fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
     let scenes = [
         ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh.triangles()),
         ("particles", procedural::generate(SceneKind::Particles, 30_000, 8).mesh.triangles()),
+        ("tiny (1e-18)", scaled(1e-18)),
+        ("huge (1e29)", scaled(1e29)),
+        ("on cell walls", on_walls),
     ];
     for (name, tris) in &scenes {
         let scene = GpuScene::new(ctx, tris).unwrap();
