@@ -14,7 +14,7 @@ use gridrt_grid::{
 };
 use gridrt_scene::procedural::{self, SceneKind};
 
-use super::common::gpu;
+use super::common::{gpu, hostile_scenes};
 
 fn check(name: &str, tris: &[[Vec3; 3]], resolutions: &[[u32; 3]]) {
     let ctx = gpu().expect("checked by the caller");
@@ -50,25 +50,6 @@ fn gpu_build_equals_the_cpu_build() {
         .collect();
     let mut degenerate = procedural::generate(SceneKind::Slivers, 2000, 6).mesh.triangles();
     degenerate.extend((0..200).map(|i| [Vec3::splat(i as f32 * 0.01); 3]));
-    let scaled = |s: f32| -> Vec<[Vec3; 3]> {
-        procedural::generate(SceneKind::Particles, 3000, 7).mesh.triangles().iter().map(|t| t.map(|p| p * s)).collect()
-    };
-    // Axis-aligned triangles on the planes of a 1/64 lattice of the unit cube (on cell walls
-    // at many resolutions).
-    let on_walls: Vec<[Vec3; 3]> = (0..3000u32)
-        .map(|k| {
-            let q = |i: u32| (i % 65) as f32 / 64.0;
-            let (a, u, v) = ((k % 3) as usize, ((k + 1) % 3) as usize, ((k + 2) % 3) as usize);
-            let (w, u0, v0) = (q(k.wrapping_mul(7919)), q(k.wrapping_mul(104_729)), q(k.wrapping_mul(1_299_709)));
-            [0, 1, 2].map(|j| {
-                let mut c = Vec3::ZERO;
-                c[a] = w;
-                c[u] = u0 + if j == 1 { 0.125 } else { 0.0 };
-                c[v] = v0 + if j == 2 { 0.125 } else { 0.0 };
-                c
-            })
-        })
-        .collect();
     let scenes = [
         ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh.triangles()),
         ("particles", procedural::generate(SceneKind::Particles, 40_000, 2).mesh.triangles()),
@@ -76,11 +57,8 @@ fn gpu_build_equals_the_cpu_build() {
         ("far from the origin", far),
         ("slivers and points", degenerate),
         ("one triangle", vec![[Vec3::ZERO, Vec3::X, Vec3::Y]]),
-        ("tiny (1e-18)", scaled(1e-18)),
-        ("huge (1e29)", scaled(1e29)),
-        ("on cell walls", on_walls),
     ];
-    for (name, tris) in &scenes {
+    for (name, tris) in scenes.iter().chain(&hostile_scenes()) {
         // 1 cell; a scan of one block (4096 elements); two levels.
         check(name, tris, &[[1, 1, 1], [7, 5, 3], [64, 40, 50], [80, 70, 60]]);
     }
@@ -121,33 +99,11 @@ fn gpu_build_of_shared_scenes_at_auto_resolution() {
 fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
     let Some(ctx) = gpu() else { return };
     let builder = GridBuilder::new(ctx).unwrap();
-    let scaled = |s: f32| -> Vec<[Vec3; 3]> {
-        procedural::generate(SceneKind::Particles, 3000, 7).mesh.triangles().iter().map(|t| t.map(|p| p * s)).collect()
-    };
-    // Axis-aligned triangles on the planes of a 1/64 lattice of the unit cube (on cell walls
-    // at many resolutions).
-    let on_walls: Vec<[Vec3; 3]> = (0..3000u32)
-        .map(|k| {
-            let q = |i: u32| (i % 65) as f32 / 64.0;
-            let (a, u, v) = ((k % 3) as usize, ((k + 1) % 3) as usize, ((k + 2) % 3) as usize);
-            let (w, u0, v0) = (q(k.wrapping_mul(7919)), q(k.wrapping_mul(104_729)), q(k.wrapping_mul(1_299_709)));
-            [0, 1, 2].map(|j| {
-                let mut c = Vec3::ZERO;
-                c[a] = w;
-                c[u] = u0 + if j == 1 { 0.125 } else { 0.0 };
-                c[v] = v0 + if j == 2 { 0.125 } else { 0.0 };
-                c
-            })
-        })
-        .collect();
     let scenes = [
         ("teapot-in-stadium", procedural::generate(SceneKind::TeapotInStadium, 1, 4).mesh.triangles()),
         ("particles", procedural::generate(SceneKind::Particles, 30_000, 8).mesh.triangles()),
-        ("tiny (1e-18)", scaled(1e-18)),
-        ("huge (1e29)", scaled(1e29)),
-        ("on cell walls", on_walls),
     ];
-    for (name, tris) in &scenes {
+    for (name, tris) in scenes.iter().chain(&hostile_scenes()) {
         let scene = GpuScene::new(ctx, tris).unwrap();
         let configs = [
             GridConfig { kind: GridKind::Flat, ..GridConfig::default() },

@@ -1,5 +1,5 @@
-//! The shared GPU context. GPU tests fail when no adapter is found, unless
-//! GRIDRT_SKIP_GPU_TESTS=1 is set explicitly (never in CI).
+//! The shared GPU context (GPU tests fail when no adapter is found, unless
+//! GRIDRT_SKIP_GPU_TESTS=1 is set explicitly, never in CI), and hostile test scenes.
 
 use std::sync::OnceLock;
 
@@ -50,4 +50,29 @@ pub fn read_texture(ctx: &GpuContext, target: &gridrt_gpu::FrameTarget, mut enc:
     );
     ctx.queue.submit([enc.finish()]);
     gridrt_gpu::trace::read_back(ctx, &readback, (w * h * 4) as u64, "texture").unwrap()
+}
+
+/// Hostile scenes for the GPU suites (the CPU's: crates/grid/tests/suite/hostile.rs): particles
+/// at 1e-18 and at 1e29, and axis-aligned triangles on the planes of a 1/64 lattice of the unit
+/// cube (on cell walls at many resolutions).
+pub fn hostile_scenes() -> Vec<(&'static str, Vec<[Vec3; 3]>)> {
+    use gridrt_scene::procedural::{self, SceneKind};
+    let scaled = |s: f32| -> Vec<[Vec3; 3]> {
+        procedural::generate(SceneKind::Particles, 3000, 7).mesh.triangles().iter().map(|t| t.map(|p| p * s)).collect()
+    };
+    let on_walls: Vec<[Vec3; 3]> = (0..3000u32)
+        .map(|k| {
+            let q = |i: u32| (i % 65) as f32 / 64.0;
+            let (a, u, v) = ((k % 3) as usize, ((k + 1) % 3) as usize, ((k + 2) % 3) as usize);
+            let (w, u0, v0) = (q(k.wrapping_mul(7919)), q(k.wrapping_mul(104_729)), q(k.wrapping_mul(1_299_709)));
+            [0, 1, 2].map(|j| {
+                let mut c = Vec3::ZERO;
+                c[a] = w;
+                c[u] = u0 + if j == 1 { 0.125 } else { 0.0 };
+                c[v] = v0 + if j == 2 { 0.125 } else { 0.0 };
+                c
+            })
+        })
+        .collect();
+    vec![("tiny (1e-18)", scaled(1e-18)), ("huge (1e29)", scaled(1e29)), ("on cell walls", on_walls)]
 }

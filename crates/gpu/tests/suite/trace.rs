@@ -17,7 +17,7 @@ use gridrt_scene::procedural::{self, SceneKind};
 use gridrt_scene::rays::{camera_rays, random_rays};
 use gridrt_scene::{Camera, Mesh, Ray};
 
-use super::common::gpu;
+use super::common::{gpu, hostile_scenes};
 
 /// Rays per scene in the full matrix (`GRIDRT_FULL_MATRICES=1`); a tenth by default.
 const RAYS: usize = 100_000;
@@ -247,20 +247,6 @@ fn gpu_matches_cpu_on_hostile_scenes() {
     let base = procedural::generate(SceneKind::Particles, 3000, 9).mesh;
     let mut far = base.clone();
     far.positions.iter_mut().for_each(|p| *p = *p * 1e3 + Vec3::new(3.0e6, -2.5e6, 1.0e6));
-    let mut walls = Mesh::default();
-    for k in 0..3000u32 {
-        let q = |i: u32| (i % 65) as f32 / 64.0;
-        let (a, u, v) = ((k % 3) as usize, ((k + 1) % 3) as usize, ((k + 2) % 3) as usize);
-        let (w, u0, v0) = (q(k.wrapping_mul(7919)), q(k.wrapping_mul(104_729)), q(k.wrapping_mul(1_299_709)));
-        for j in 0..3 {
-            let mut c = Vec3::ZERO;
-            c[a] = w;
-            c[u] = u0 + if j == 1 { 0.125 } else { 0.0 };
-            c[v] = v0 + if j == 2 { 0.125 } else { 0.0 };
-            walls.positions.push(c);
-        }
-        walls.indices.push([3 * k, 3 * k + 1, 3 * k + 2]);
-    }
     let mut copies = base.clone();
     let n = copies.indices.len();
     for i in 0..n / 2 {
@@ -268,6 +254,12 @@ fn gpu_matches_cpu_on_hostile_scenes() {
         copies.indices.push(t);
         copies.indices.push([t[0], t[1], t[1]]);
     }
-    let scenes = [("far from the origin", far), ("on cell walls", walls), ("coincident and degenerate", copies)];
+    let mesh_of = |tris: Vec<[Vec3; 3]>| Mesh {
+        positions: tris.iter().flatten().copied().collect(),
+        indices: (0..tris.len() as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect(),
+    };
+    let walls = hostile_scenes().into_iter().find(|(n, _)| *n == "on cell walls").expect("a hostile scene").1;
+    let scenes =
+        [("far from the origin", far), ("on cell walls", mesh_of(walls)), ("coincident and degenerate", copies)];
     compare_scenes(scenes.into_iter().map(|(name, mesh)| (name.to_string(), mesh)), &[true]);
 }
