@@ -15,7 +15,7 @@ use super::common::*;
 
 /// Shadow rays from each hit towards `light` (an empty ray for a miss), as the renderer makes
 /// them.
-fn shadow_rays(primary: &[Ray], hits: &[Hit], light: Vec3, diagonal: f32) -> Vec<Ray> {
+pub fn shadow_rays(primary: &[Ray], hits: &[Hit], light: Vec3, diagonal: f32) -> Vec<Ray> {
     primary
         .iter()
         .zip(hits)

@@ -13,6 +13,7 @@ use gridrt_grid::{AnyGrid, BuildOptions, GridConfig, GridKind, InsertMode, Packe
 use gridrt_scene::rng::Rng;
 use gridrt_scene::{Aabb, Camera, Hit, Ray};
 
+use super::coherent::shadow_rays;
 use super::common::{assert_same_hits, assert_same_occlusion, reference};
 
 /// A hostile scene of `seed`'s kind, and its name.
@@ -222,6 +223,18 @@ fn hostile_scenes_in_packets_equal_brute_force() {
                     let any = TraceOptions { query: Query::Any, ..TraceOptions::MAILBOX };
                     let (hits, _, _) = grid.trace_packets(&tris, &rays, w as usize, any, packets, true);
                     assert_same_occlusion(&format!("{name} {kind} packets {tile} any"), &tris, &rays, &expected, &hits);
+                    // Shadow packets: from the hits towards a light outside the box.
+                    let light = b.max + b.extent() * 0.7;
+                    let shadows = shadow_rays(&rays, &expected, light, b.diagonal());
+                    let (want, _) = reference(&tris, &shadows);
+                    let (hits, _, _) = grid.trace_packets(&tris, &shadows, w as usize, any, packets, true);
+                    assert_same_occlusion(
+                        &format!("{name} {kind} shadow packets {tile}"),
+                        &tris,
+                        &shadows,
+                        &want,
+                        &hits,
+                    );
                 }
             }
         }
