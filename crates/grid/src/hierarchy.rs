@@ -86,12 +86,17 @@ pub enum Cell {
     Child(u32),
 }
 
-/// The margin (in cells) a node with accumulated `scale` needs: f32 coordinates of the top grid
-/// (up to its resolution) carry a relative error of a few ulps, magnified by `scale` in child
-/// cells.
-pub fn child_margin(top_res: UVec3, scale: Vec3) -> f64 {
-    let err = 16.0 * f32::EPSILON as f64 * top_res.max_element() as f64 * scale.max_element() as f64;
-    err.max(INSERT_MARGIN_CELLS)
+/// The margin (in cells) a node `geom` at `depth` with accumulated `scale` needs. The ray's side:
+/// f32 coordinates of the top grid (up to its resolution) carry a relative error of a few ulps,
+/// magnified by `scale` in child cells. The triangles' side: the node's box is found in world
+/// coordinates, one rounding per level ([`cell_geometry`]), and a corner is mapped into it by one
+/// more, each up to an ulp of the coordinates' magnitude, which far from the origin can be a
+/// good part of a deep node's cell (a scene at 3e6 has ulps of 0.25).
+pub fn child_margin(top_res: UVec3, scale: Vec3, geom: &GridGeometry, depth: u32) -> f64 {
+    let ray = 16.0 * f32::EPSILON as f64 * top_res.max_element() as f64 * scale.max_element() as f64;
+    let magnitude = geom.min.abs().max(geom.max.abs()).max_element() as f64;
+    let world = 4.0 * (depth as f64 + 2.0) * f32::EPSILON as f64 * magnitude / geom.cell.min_element() as f64;
+    ray.max(world).max(INSERT_MARGIN_CELLS)
 }
 
 impl Hierarchy {

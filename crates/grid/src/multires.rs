@@ -163,11 +163,11 @@ impl Ctx<'_> {
             return Ok(None);
         }
         let scale = parent_scale * res.as_vec3();
-        let margin = child_margin(self.top_res, scale);
+        let geom = cell_geometry(parent, c, res);
+        let margin = child_margin(self.top_res, scale, &geom, depth);
         if margin > MAX_CHILD_MARGIN {
             return Ok(None);
         }
-        let geom = cell_geometry(parent, c, res);
         // Every candidate sub-grid counts, kept or not: bucketing one costs its cells, and a
         // huge density would otherwise evaluate (and reject) 64³ cells below every occupied cell.
         let used = self.cells.fetch_add(geom.cell_count(), std::sync::atomic::Ordering::Relaxed) + geom.cell_count();

@@ -240,3 +240,52 @@ fn hostile_scenes_in_packets_equal_brute_force() {
         }
     }
 }
+
+/// The hostile scenes and rays through grids the auto resolution would not choose: one cell,
+/// 1024 cells along one axis, flat slabs, macrocell edges 2 and 16, a multires octree as deep as
+/// allowed (every cell subdivided), closest hits with Amanatides-Woo and Cleary-Wyvill.
+#[test]
+fn hostile_scenes_in_odd_grids_equal_brute_force() {
+    use gridrt_grid::Resolution;
+    use gridrt_grid::multires::{MultiresOptions, Policy};
+    for seed in 0..seeds() {
+        let (name, tris) = scene(seed);
+        let rays = rays(&tris, seed, 1500);
+        let (expected, _) = reference(&tris, &rays);
+        let explicit = |r: [u32; 3]| Some(Resolution::Explicit(r));
+        let mut configs = Vec::new();
+        for res in [[1, 1, 1], [1024, 1, 1], [3, 300, 2], [64, 64, 1]] {
+            configs.push(GridConfig { kind: GridKind::Flat, resolution: explicit(res), ..GridConfig::default() });
+            configs.push(GridConfig { kind: GridKind::Proximity, resolution: explicit(res), ..GridConfig::default() });
+        }
+        for a in [2, 16] {
+            configs.push(GridConfig { kind: GridKind::Macrocell, macro_size: Some(a), ..GridConfig::default() });
+        }
+        configs.push(GridConfig {
+            kind: GridKind::Macrocell,
+            macro_size: Some(8),
+            resolution: explicit([37, 5, 130]),
+            ..GridConfig::default()
+        });
+        configs.push(GridConfig {
+            kind: GridKind::Multires,
+            resolution: explicit([2, 2, 2]),
+            multires: MultiresOptions {
+                policy: Policy::Octree,
+                max_depth: gridrt_grid::hierarchy::MAX_DEPTH as u32 - 1,
+                always_subdivide: true,
+                ..MultiresOptions::default()
+            },
+            ..GridConfig::default()
+        });
+        for cfg in configs {
+            let (grid, _) = structure::build(&tris, &cfg).unwrap_or_else(|e| panic!("{name} {cfg:?}: {e}"));
+            for traversal in [Traversal::AmanatidesWoo, Traversal::ClearyWyvill] {
+                let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
+                let (hits, _) = grid.trace_batch(&tris, &rays, opts, true);
+                let what = format!("{name} {} {:?} A={:?} {traversal}", cfg.kind, cfg.resolution, cfg.macro_size);
+                assert_same_hits(&what, &rays, &expected, &hits);
+            }
+        }
+    }
+}
