@@ -243,7 +243,7 @@ fn hostile_scenes_in_packets_equal_brute_force() {
 
 /// The hostile scenes and rays through grids the auto resolution would not choose: one cell,
 /// 1024 cells along one axis, flat slabs, macrocell edges 2 and 16, a multires octree as deep as
-/// allowed (every cell subdivided), closest hits with Amanatides-Woo and Cleary-Wyvill.
+/// allowed (every cell subdivided), closest hits with every exact walker.
 #[test]
 fn hostile_scenes_in_odd_grids_equal_brute_force() {
     use gridrt_grid::Resolution;
@@ -280,7 +280,7 @@ fn hostile_scenes_in_odd_grids_equal_brute_force() {
         });
         for cfg in configs {
             let (grid, _) = structure::build(&tris, &cfg).unwrap_or_else(|e| panic!("{name} {cfg:?}: {e}"));
-            for traversal in [Traversal::AmanatidesWoo, Traversal::ClearyWyvill] {
+            for traversal in Traversal::EXACT {
                 let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
                 let (hits, _) = grid.trace_batch(&tris, &rays, opts, true);
                 let what = format!("{name} {} {:?} A={:?} {traversal}", cfg.kind, cfg.resolution, cfg.macro_size);
