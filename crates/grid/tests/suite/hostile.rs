@@ -289,3 +289,22 @@ fn hostile_scenes_in_odd_grids_equal_brute_force() {
         }
     }
 }
+
+/// The experimental irregular grid (merged and expanded cells) on the hostile scenes and rays.
+#[test]
+fn hostile_scenes_in_the_irregular_grid_equal_brute_force() {
+    use gridrt_grid::irregular::{IrregularGrid, IrregularOptions};
+    use gridrt_grid::{CostModel, Resolution, build_flat};
+    for seed in 0..seeds() {
+        let (name, tris) = scene(seed);
+        let rays = rays(&tris, seed, 1500);
+        let (expected, _) = reference(&tris, &rays);
+        let opts = BuildOptions { insert: InsertMode::BoundingBox, parallel: true };
+        let (flat, _, _) = build_flat(&tris, Resolution::Auto, &CostModel::memory_aware(), opts).unwrap();
+        for expand in [false, true] {
+            let irr = IrregularGrid::from_flat(&flat, IrregularOptions { expand, ..Default::default() });
+            let got: Vec<Hit> = rays.iter().map(|r| irr.trace(&tris, r, TraceOptions::MAILBOX).0).collect();
+            assert_same_hits(&format!("{name} irregular expand={expand}"), &rays, &expected, &got);
+        }
+    }
+}
