@@ -308,3 +308,23 @@ fn hostile_scenes_in_the_irregular_grid_equal_brute_force() {
         }
     }
 }
+
+/// The hostile rays (no image, no coherence: odd directions, segments, origins on triangles)
+/// traced as packets of a 30-ray-wide "image": every packet, coherent or not, equals brute force.
+#[test]
+fn hostile_rays_as_packets_equal_brute_force() {
+    for seed in 0..seeds() {
+        let (name, tris) = scene(seed);
+        let mut rays = rays(&tris, seed, 1500);
+        rays.truncate(rays.len() / 30 * 30);
+        let (expected, _) = reference(&tris, &rays);
+        for kind in [GridKind::Flat, GridKind::Macrocell, GridKind::Proximity] {
+            let (grid, _) = structure::build(&tris, &GridConfig { kind, ..GridConfig::default() }).unwrap();
+            for tile in [2, 5, 8] {
+                let packets = PacketOptions { tile, mailbox: true };
+                let (hits, _, _) = grid.trace_packets(&tris, &rays, 30, TraceOptions::MAILBOX, packets, true);
+                assert_same_hits(&format!("{name} {kind} packets {tile} of hostile rays"), &rays, &expected, &hits);
+            }
+        }
+    }
+}
