@@ -13,7 +13,7 @@ use gridrt_grid::{GridConfig, GridKind, TraceOptions, structure};
 use gridrt_scene::procedural::{SceneKind, generate};
 use gridrt_scene::{Aabb, Camera, Hit};
 
-use super::common::{default_scene, gpu, read_texture};
+use super::common::{default_scene, gpu, hostile_scenes, read_texture};
 
 /// The auto view, a close view, two views from inside the box with a wide field of view, and
 /// a grazing view along the bottom face.
@@ -98,6 +98,28 @@ fn packet_kernels_equal_single_ray_kernels_bit_for_bit() {
         }
     }
     assert!(walked > 20, "too few images with hits: {walked}");
+}
+
+/// The packet kernels on the hostile scenes (tiny, huge, triangles on cell walls): primary rays
+/// of every camera, the single-ray kernels' hits bit for bit.
+#[test]
+fn packet_kernels_equal_single_ray_kernels_on_hostile_scenes() {
+    let Some(ctx) = gpu() else { return };
+    for (name, tris) in hostile_scenes() {
+        let b = Aabb::from_points(tris.iter().flatten());
+        let gpu = GpuSession::new(ctx, &tris, b).unwrap();
+        for grid_kind in [GridKind::Flat, GridKind::Macrocell] {
+            let (grid, _) = structure::build(&tris, &GridConfig { kind: grid_kind, ..GridConfig::default() }).unwrap();
+            let gs = gpu.upload(&grid).unwrap();
+            for (ci, cam) in cameras(&b).iter().enumerate() {
+                let (w, h) = (45, 34);
+                let rays = camera_rays(&gpu_camera(cam, w, h));
+                let (single, _) = gpu.trace(&gs, &rays, TraceOptions::MAILBOX).unwrap();
+                let (packets, _) = gpu.trace_image(&gs, &rays, w, TraceOptions::MAILBOX).unwrap();
+                assert_eq!(differing(&single, &packets), 0, "{name} {grid_kind} camera {ci}");
+            }
+        }
+    }
 }
 
 /// The renderer with packets: the same hits as without, whole frames and tiles that start in
