@@ -158,28 +158,37 @@ fn seeds() -> u64 {
     std::env::var("GRIDRT_HOSTILE_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(12)
 }
 
-#[test]
-fn hostile_scenes_and_rays_equal_brute_force() {
+/// `check(name, triangles, rays, brute force's hits)` for each seed's scene and `count` of its
+/// rays (and the extra segments and corner rays [`rays`] adds).
+fn each_case(count: usize, mut check: impl FnMut(&str, &[[Vec3; 3]], &[Ray], &[Hit])) {
     for seed in 0..seeds() {
         let (name, tris) = scene(seed);
-        let rays = rays(&tris, seed, 3000);
-        let (expected, stats) = reference(&tris, &rays);
-        println!("{name}: {} triangles, {} rays, {} hits", tris.len(), rays.len(), stats.hits);
+        let rays = rays(&tris, seed, count);
+        let (expected, _) = reference(&tris, &rays);
+        check(&name, &tris, &rays, &expected);
+    }
+}
+
+#[test]
+fn hostile_scenes_and_rays_equal_brute_force() {
+    each_case(3000, |name, tris, rays, expected| {
+        let hits = expected.iter().filter(|h| h.is_hit()).count();
+        println!("{name}: {} triangles, {} rays, {hits} hits", tris.len(), rays.len());
         for kind in GridKind::ALL {
             for insert in InsertMode::ALL {
                 let cfg = GridConfig { kind, build: BuildOptions { insert, parallel: true }, ..GridConfig::default() };
-                let (grid, _) = structure::build(&tris, &cfg).unwrap_or_else(|e| panic!("{name} {kind}: {e}"));
+                let (grid, _) = structure::build(tris, &cfg).unwrap_or_else(|e| panic!("{name} {kind}: {e}"));
                 for traversal in Traversal::EXACT {
                     let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
-                    let (hits, _) = grid.trace_batch(&tris, &rays, opts, true);
-                    assert_same_hits(&format!("{name} {kind} {insert:?} {traversal}"), &rays, &expected, &hits);
+                    let (hits, _) = grid.trace_batch(tris, rays, opts, true);
+                    assert_same_hits(&format!("{name} {kind} {insert:?} {traversal}"), rays, expected, &hits);
                     let any = TraceOptions { query: Query::Any, ..opts };
-                    let (hits, _) = grid.trace_batch(&tris, &rays, any, true);
+                    let (hits, _) = grid.trace_batch(tris, rays, any, true);
                     assert_same_occlusion(
                         &format!("{name} {kind} {insert:?} {traversal} any"),
-                        &tris,
-                        &rays,
-                        &expected,
+                        tris,
+                        rays,
+                        expected,
                         &hits,
                     );
                 }
@@ -187,15 +196,15 @@ fn hostile_scenes_and_rays_equal_brute_force() {
                 let mut hits = vec![Hit::MISS; rays.len()];
                 let opts = TraceOptions::MAILBOX;
                 match &grid {
-                    AnyGrid::Flat(f) => trace_grid_interleaved(f, &tris, &rays, &mut hits, opts),
-                    AnyGrid::Macrocell(m) => trace_grid_interleaved(m, &tris, &rays, &mut hits, opts),
-                    AnyGrid::Proximity(p) => trace_grid_interleaved(p, &tris, &rays, &mut hits, opts),
+                    AnyGrid::Flat(f) => trace_grid_interleaved(f, tris, rays, &mut hits, opts),
+                    AnyGrid::Macrocell(m) => trace_grid_interleaved(m, tris, rays, &mut hits, opts),
+                    AnyGrid::Proximity(p) => trace_grid_interleaved(p, tris, rays, &mut hits, opts),
                     _ => continue,
                 };
-                assert_same_hits(&format!("{name} {kind} {insert:?} interleaved"), &rays, &expected, &hits);
+                assert_same_hits(&format!("{name} {kind} {insert:?} interleaved"), rays, expected, &hits);
             }
         }
-    }
+    });
 }
 
 #[test]
@@ -248,10 +257,7 @@ fn hostile_scenes_in_packets_equal_brute_force() {
 fn hostile_scenes_in_odd_grids_equal_brute_force() {
     use gridrt_grid::Resolution;
     use gridrt_grid::multires::{MultiresOptions, Policy};
-    for seed in 0..seeds() {
-        let (name, tris) = scene(seed);
-        let rays = rays(&tris, seed, 1500);
-        let (expected, _) = reference(&tris, &rays);
+    each_case(1500, |name, tris, rays, expected| {
         let explicit = |r: [u32; 3]| Some(Resolution::Explicit(r));
         let mut configs = Vec::new();
         for res in [[1, 1, 1], [1024, 1, 1], [3, 300, 2], [64, 64, 1]] {
@@ -279,15 +285,15 @@ fn hostile_scenes_in_odd_grids_equal_brute_force() {
             ..GridConfig::default()
         });
         for cfg in configs {
-            let (grid, _) = structure::build(&tris, &cfg).unwrap_or_else(|e| panic!("{name} {cfg:?}: {e}"));
+            let (grid, _) = structure::build(tris, &cfg).unwrap_or_else(|e| panic!("{name} {cfg:?}: {e}"));
             for traversal in Traversal::EXACT {
                 let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
-                let (hits, _) = grid.trace_batch(&tris, &rays, opts, true);
+                let (hits, _) = grid.trace_batch(tris, rays, opts, true);
                 let what = format!("{name} {} {:?} A={:?} {traversal}", cfg.kind, cfg.resolution, cfg.macro_size);
-                assert_same_hits(&what, &rays, &expected, &hits);
+                assert_same_hits(&what, rays, expected, &hits);
             }
         }
-    }
+    });
 }
 
 /// The experimental irregular grid (merged and expanded cells) on the hostile scenes and rays.
@@ -295,18 +301,15 @@ fn hostile_scenes_in_odd_grids_equal_brute_force() {
 fn hostile_scenes_in_the_irregular_grid_equal_brute_force() {
     use gridrt_grid::irregular::{IrregularGrid, IrregularOptions};
     use gridrt_grid::{CostModel, Resolution, build_flat};
-    for seed in 0..seeds() {
-        let (name, tris) = scene(seed);
-        let rays = rays(&tris, seed, 1500);
-        let (expected, _) = reference(&tris, &rays);
+    each_case(1500, |name, tris, rays, expected| {
         let opts = BuildOptions { insert: InsertMode::BoundingBox, parallel: true };
-        let (flat, _, _) = build_flat(&tris, Resolution::Auto, &CostModel::memory_aware(), opts).unwrap();
+        let (flat, _, _) = build_flat(tris, Resolution::Auto, &CostModel::memory_aware(), opts).unwrap();
         for expand in [false, true] {
             let irr = IrregularGrid::from_flat(&flat, IrregularOptions { expand, ..Default::default() });
-            let got: Vec<Hit> = rays.iter().map(|r| irr.trace(&tris, r, TraceOptions::MAILBOX).0).collect();
-            assert_same_hits(&format!("{name} irregular expand={expand}"), &rays, &expected, &got);
+            let got: Vec<Hit> = rays.iter().map(|r| irr.trace(tris, r, TraceOptions::MAILBOX).0).collect();
+            assert_same_hits(&format!("{name} irregular expand={expand}"), rays, expected, &got);
         }
-    }
+    });
 }
 
 /// The hostile rays (no image, no coherence: odd directions, segments, origins on triangles)
