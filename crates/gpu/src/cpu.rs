@@ -11,10 +11,7 @@ use crate::view::View;
 
 /// The camera constants the render kernels read.
 pub fn gpu_camera(cam: &Camera, width: u32, height: u32) -> GpuCamera {
-    let fwd = (cam.target - cam.eye).normalize();
-    let up0 = if fwd.cross(cam.up).length_squared() < 1e-12 { Vec3::Z } else { cam.up };
-    let right = fwd.cross(up0).normalize();
-    let up = right.cross(fwd);
+    let (right, up, fwd) = cam.basis();
     let half_v = (cam.vfov_deg.to_radians() * 0.5).tan();
     GpuCamera {
         eye: cam.eye.to_array(),

@@ -47,9 +47,10 @@ impl Camera {
             up: Vec3::Y,
             vfov_deg: v[6],
         };
-        // The view direction must survive normalisation in f32 (1e-30 apart underflows to NaN).
-        if (cam.target - cam.eye).normalize_or_zero() == Vec3::ZERO {
-            return Err(format!("eye and target are the same point or too close to give a view direction: \"{s}\""));
+        if cam.forward() == Vec3::ZERO {
+            return Err(format!(
+                "eye and target are the same point, or too far apart for f32, to give a view direction: \"{s}\""
+            ));
         }
         if !(0.01..179.0).contains(&cam.vfov_deg) {
             return Err(format!("fov must be in (0, 179) degrees, got {}", cam.vfov_deg));
@@ -57,9 +58,19 @@ impl Camera {
         Ok(cam)
     }
 
+    /// The unit view direction, or zero when eye and target coincide or their difference
+    /// overflows f32. A difference whose squared length would overflow (eye and target 1e30
+    /// apart) or underflow (1e-30 apart) is scaled by its largest component first.
+    pub fn forward(&self) -> Vec3 {
+        let d = self.target - self.eye;
+        let n = d.normalize_or_zero();
+        let m = d.abs().max_element();
+        if n != Vec3::ZERO || !d.is_finite() || m == 0.0 { n } else { (d / m).normalize_or_zero() }
+    }
+
     /// Orthonormal basis (right, up, forward) with a fallback up vector when looking along it.
     pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
-        let fwd = (self.target - self.eye).normalize();
+        let fwd = self.forward();
         let up = if fwd.cross(self.up).length_squared() < 1e-12 { Vec3::Z } else { self.up };
         let right = fwd.cross(up).normalize();
         (right, right.cross(fwd), fwd)
@@ -73,5 +84,27 @@ impl Camera {
         let sx = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half_h;
         let sy = (1.0 - (y as f32 + 0.5) / height as f32 * 2.0) * half_v;
         Ray::new(self.eye, fwd + right * sx + up * sy, 0.0, f32::INFINITY)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The view direction of cameras whose eye-to-target distance squared leaves f32 (1e30 and
+    /// 1e-30 apart) is still the unit direction; coincident or overflowing ones have none.
+    #[test]
+    fn forward_survives_extreme_distances() {
+        let cam = |eye: Vec3, target: Vec3| Camera { eye, target, up: Vec3::Y, vfov_deg: 60.0 };
+        for s in [1e30f32, 1e-30, 1.0] {
+            let f = cam(Vec3::new(s, 0.0, 0.0), Vec3::ZERO).forward();
+            assert!((f - -Vec3::X).length() < 1e-6, "{s}: {f}");
+            let f = cam(Vec3::ZERO, Vec3::new(s, s, 0.0)).forward();
+            assert!((f.length() - 1.0).abs() < 1e-6 && f.z == 0.0, "{s}: {f}");
+        }
+        assert_eq!(cam(Vec3::ONE, Vec3::ONE).forward(), Vec3::ZERO);
+        assert_eq!(cam(Vec3::splat(3e38), Vec3::splat(-3e38)).forward(), Vec3::ZERO);
+        assert!(Camera::parse("1e30,0,0,0,0,0,60").is_ok());
+        assert!(Camera::parse("3e38,0,0,-3e38,0,0,60").is_err());
     }
 }
