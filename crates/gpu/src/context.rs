@@ -68,11 +68,23 @@ fn collect_device_errors(device: &wgpu::Device) -> Arc<Mutex<Vec<String>>> {
     let sink = errors.clone();
     device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
         if let Ok(mut v) = sink.lock() {
-            // The first line names the failed call; the rest repeats the labels.
-            v.push(e.to_string().lines().next().unwrap_or("unknown error").to_string());
+            // Each error in the chain on one line ("Validation Error" alone names no cause); the
+            // first line of each names the failed call, the rest repeats the labels.
+            let mut parts = vec![first_line(&e.to_string())];
+            let mut cause = std::error::Error::source(&e);
+            while let Some(c) = cause {
+                parts.push(first_line(&c.to_string()));
+                cause = c.source();
+            }
+            parts.dedup();
+            v.push(parts.join(": "));
         }
     }));
     errors
+}
+
+fn first_line(s: &str) -> String {
+    s.lines().next().unwrap_or("unknown error").trim().to_string()
 }
 
 /// The limits gridrt asks for, within what `adapter` offers.

@@ -320,6 +320,9 @@ impl Tracer {
             // Both maps wait on one poll, and the bytes go straight into the results.
             let [hit_slice, stat_slice] =
                 map_for_reading(ctx, [(&b.hits_read, hit_bytes), (&b.stats_read, stat_bytes)], "hits and ray stats")?;
+            // A pipeline or bind group the device refused leaves the buffers as they were:
+            // an error, not hits.
+            ctx.check_device()?;
             {
                 let err = |what, e: &dyn std::fmt::Display| GpuError::Readback { what, detail: e.to_string() };
                 let view = hit_slice.get_mapped_range().map_err(|e| err("hits", &e))?;

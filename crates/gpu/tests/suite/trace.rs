@@ -263,3 +263,23 @@ fn gpu_matches_cpu_on_hostile_scenes() {
         [("far from the origin", far), ("on cell walls", mesh_of(walls)), ("coincident and degenerate", copies)];
     compare_scenes(scenes.into_iter().map(|(name, mesh)| (name.to_string(), mesh)), &[true]);
 }
+
+/// A dispatch the device refuses (here a macrocell structure without its occupancy bits, so its
+/// bind group does not match the kernel) is an error, not a buffer of zeroed hits.
+#[test]
+fn refused_trace_is_an_error() {
+    if gpu().is_none() {
+        return;
+    }
+    // A device of its own: device errors are per device, and the shared one serves other tests.
+    let ctx = gridrt_gpu::GpuContext::new_headless_blocking().unwrap();
+    let mesh = procedural::generate(SceneKind::Particles, 500, 3).mesh;
+    let tris = mesh.triangles();
+    let (grid, _) = structure::build(&tris, &GridConfig { kind: GridKind::Macrocell, ..Default::default() }).unwrap();
+    let scene = GpuScene::new(&ctx, &tris).unwrap();
+    let mut gs = GpuStructure::new(&ctx, &grid).unwrap();
+    gs.extra = None;
+    let rays = rays_for(&mesh, 256);
+    let err = Tracer::new().trace(&ctx, &scene, &gs, &rays, TraceOptions::default()).unwrap_err();
+    assert!(err.to_string().contains("bind group") || err.to_string().contains("Bind"), "{err}");
+}
