@@ -336,6 +336,12 @@ impl<'a> RigBuilder<'a> {
                 Property::Scale => Target::Scale,
                 Property::MorphTargetWeights => Target::Weights,
             };
+            let sampler = ch.sampler().index();
+            if target == Target::Rotation
+                && let Some(k) = samplers.get(sampler).and_then(Sampler::zero_quaternion_key)
+            {
+                return Err(fail(sampler, format!("rotation key {k} is the zero quaternion (it has no direction)")));
+            }
             if target != Target::Weights && !std::mem::replace(&mut is_moved[node as usize], true) {
                 moved.push(node);
             }

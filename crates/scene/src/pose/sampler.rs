@@ -41,6 +41,12 @@ impl Sampler {
         (self.times[0], self.times[self.times.len() - 1])
     }
 
+    /// The first key whose value (as a quaternion, `width` 4) has length zero: a rotation no
+    /// normalisation can give a direction (NaN in every vertex it moves).
+    pub fn zero_quaternion_key(&self) -> Option<usize> {
+        (0..self.times.len()).find(|&k| quat(self.value(k)).length_squared() == 0.0)
+    }
+
     /// Element `k`'s value (the middle of its triple for `CUBICSPLINE`).
     fn value(&self, k: usize) -> &[f64] {
         let w = self.width;

@@ -203,6 +203,39 @@ fn a_pose_that_leaves_the_supported_range_is_an_error_not_a_panic() {
     assert!(matches!(*inner, SceneError::CoordinateOutOfRange { node: 1, vertex: 1, .. }), "{inner}");
 }
 
+/// A rotation key of length zero has no direction: refused on load, naming its key, instead of
+/// posing every vertex it moves to NaN at that key's time. Keys of other lengths pose as unit ones
+/// at their times (rotations are normalised after interpolation).
+#[test]
+fn a_zero_quaternion_key_is_refused_and_other_lengths_are_normalised() {
+    let rotation_keys = |keys: &[f32]| {
+        let mut d = skinned_doc();
+        let times = d.floats(&[0.0, 1.0], "SCALAR", 1);
+        let rot = d.floats(keys, "VEC4", 4);
+        d.json["animations"][0]["samplers"][0]["input"] = json!(times);
+        d.json["animations"][0]["samplers"][0]["output"] = json!(rot);
+        d
+    };
+    let e = load_rigged_slice_with(
+        &rotation_keys(&[0., 0., 0., 1., 0., 0., 0., 0.]).glb(),
+        "zero.glb",
+        None,
+        &LoadLimits::default(),
+    )
+    .err()
+    .expect("a zero rotation key is refused");
+    assert!(matches!(e, SceneError::InvalidAnimation { animation: 0, sampler: Some(0), .. }), "{e}");
+    assert!(e.to_string().contains("rotation key 1 is the zero quaternion"), "{e}");
+    // Keys of other lengths (3 × identity, 2 × the 90° key) pose at their times as the unit keys.
+    let q = DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2) * 2.0;
+    let scaled = load(rotation_keys(&[0., 0., 0., 3., q.x as f32, q.y as f32, q.z as f32, q.w as f32]));
+    let unit = load(skinned_doc());
+    for t in [0.0, 1.0] {
+        let want: Vec<DVec3> = pose(&unit, 0, t).iter().map(|p| p.as_dvec3()).collect();
+        assert_points(&pose(&scaled, 0, t), &want, &format!("scaled keys at t = {t}"));
+    }
+}
+
 /// Invariants on the shared animated scenes: every clip poses at any time into finite
 /// positions of the same count; a pose is the same computed twice or one loop later; the
 /// clamped ends equal the ends; a clip moves something over its duration.
