@@ -1,8 +1,11 @@
 //!include shared/bindings.wgsl
 //!include shared/ray.wgsl
+//!include shared/hit_{HIT_FLOAT}.wgsl
 // Watertight ray/triangle test (Woop, Benthin, Wald 2013) with exact-sign edge functions.
 // CPU port: crates/grid/src/triangle.rs (`intersect`), which computes the edge functions in
-// f64; WGSL has no f64, so Kahan's FMA difference of products gives the same (exact) signs.
+// f64; WebGPU's WGSL has no f64, so Kahan's FMA difference of products gives the same (exact)
+// signs, and a hit's t, u, v come from shared/hit_f64.wgsl (bit-identical to the CPU) where the
+// device has f64, else from shared/hit_f32.wgsl (`{HIT_FLOAT}`, crates/gpu/src/shaders.rs).
 
 struct TriHit {
     hit: bool,
@@ -44,22 +47,17 @@ fn intersect_triangle(r: PreparedRay, tri: u32) -> TriHit {
     if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return out;
     }
-    let det = u + v + w;
-    if det == 0.0 {
-        return out;
-    }
-    let az = r.sz * a[r.kz];
-    let bz = r.sz * b[r.kz];
-    let cz = r.sz * c[r.kz];
-    let t = (u * az + v * bz + w * cz) / det;
+    let z = r.sz * vec3<f32>(a[r.kz], b[r.kz], c[r.kz]);
+    let h = hit_values(vec3<f32>(u, v, w), ax, ay, bx, by, cx, cy, z);
+    let t = h.x;
     // A t that overflows f32 (either sign) is no hit (CPU: triangle.rs).
-    if !(t >= r.tmin && t <= r.tmax && abs(t) < inf()) {
+    if h.w == 0.0 || !(t >= r.tmin && t <= r.tmax && abs(t) < inf()) {
         return out;
     }
     out.hit = true;
     out.t = t;
-    out.u = v / det;
-    out.v = w / det;
+    out.u = h.y;
+    out.v = h.z;
     return out;
 }
 

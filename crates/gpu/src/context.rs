@@ -121,6 +121,8 @@ impl GpuContext {
         }
         let desc = wgpu::DeviceDescriptor {
             label: Some("gridrt device"),
+            // f64 in shaders where the adapter has it: bit-identical hits (shaders::HitFloat).
+            required_features: adapter.features() & wgpu::Features::SHADER_F64,
             required_limits: required_limits(&adapter.limits()),
             ..Default::default()
         };

@@ -2,7 +2,8 @@
 //! carry them, and their composition: a line `//!include shared/x.wgsl` is replaced by that
 //! file (itself composed), each file at most once per module. In an include path,
 //! `{TRAVERSAL}` stands for the walker the module is composed with (`aw`, `cw` or `liu`): each
-//! trace pipeline carries only its own walker's code and state.
+//! trace pipeline carries only its own walker's code and state; `{HIT_FLOAT}` for how a hit's t, u, v
+//! are computed ([`HitFloat`]: f64 where the device has it).
 
 use crate::kernel::GpuWalker;
 
@@ -31,6 +32,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/bindings.wgsl", include_str!("../../../shaders/shared/bindings.wgsl")),
     ("shared/ray.wgsl", include_str!("../../../shaders/shared/ray.wgsl")),
     ("shared/triangle.wgsl", include_str!("../../../shaders/shared/triangle.wgsl")),
+    ("shared/hit_f32.wgsl", include_str!("../../../shaders/shared/hit_f32.wgsl")),
+    ("shared/hit_f64.wgsl", include_str!("../../../shaders/shared/hit_f64.wgsl")),
     ("shared/walker_common.wgsl", include_str!("../../../shaders/shared/walker_common.wgsl")),
     ("shared/walker_aw.wgsl", include_str!("../../../shaders/shared/walker_aw.wgsl")),
     ("shared/walker_cw.wgsl", include_str!("../../../shaders/shared/walker_cw.wgsl")),
@@ -59,20 +62,59 @@ pub fn source(name: &str) -> Option<&'static str> {
     SOURCES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
 }
 
-/// The composed module for `name` (e.g. `"flat.wgsl"`) with the Amanatides–Woo walker.
+/// How the triangle test computes a hit's t, u and v once the exact edge signs have accepted it:
+/// `{HIT_FLOAT}` in an include (`shaders/shared/hit_{f32,f64}.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum HitFloat {
+    /// In f32 (WebGPU has no f64): the same triangle as the CPU, t, u, v within a few ulps.
+    #[default]
+    F32,
+    /// In f64, the CPU's operations: bit-identical hits. Needs `wgpu::Features::SHADER_F64`.
+    F64,
+}
+
+impl HitFloat {
+    pub const ALL: [HitFloat; 2] = [HitFloat::F32, HitFloat::F64];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            HitFloat::F32 => "f32",
+            HitFloat::F64 => "f64",
+        }
+    }
+
+    /// F64 where the device was created with f64 shaders, else F32.
+    pub fn for_features(features: wgpu::Features) -> HitFloat {
+        if features.contains(wgpu::Features::SHADER_F64) { HitFloat::F64 } else { HitFloat::F32 }
+    }
+}
+
+/// The composed module for `name` (e.g. `"flat.wgsl"`) with the Amanatides–Woo walker and f32
+/// hits.
 pub fn compose(name: &str) -> Result<String, ComposeError> {
     compose_with(name, GpuWalker::default())
 }
 
-/// The composed module for `name` with `walker` standing for `{TRAVERSAL}`.
+/// The composed module for `name` with `walker` standing for `{TRAVERSAL}` (f32 hits).
 pub fn compose_with(name: &str, walker: GpuWalker) -> Result<String, ComposeError> {
+    compose_for(name, walker, HitFloat::F32)
+}
+
+/// The composed module for `name` with `walker` standing for `{TRAVERSAL}` and `hit` for
+/// `{HIT_FLOAT}`.
+pub fn compose_for(name: &str, walker: GpuWalker, hit: HitFloat) -> Result<String, ComposeError> {
     let mut out = String::new();
     let mut seen = Vec::new();
-    compose_into(name, walker, &mut out, &mut seen)?;
+    compose_into(name, (walker, hit), &mut out, &mut seen)?;
     Ok(out)
 }
 
-fn compose_into(name: &str, walker: GpuWalker, out: &mut String, seen: &mut Vec<String>) -> Result<(), ComposeError> {
+fn compose_into(
+    name: &str,
+    (walker, hit): (GpuWalker, HitFloat),
+    out: &mut String,
+    seen: &mut Vec<String>,
+) -> Result<(), ComposeError> {
     if seen.iter().any(|s| s == name) {
         return Ok(());
     }
@@ -80,8 +122,8 @@ fn compose_into(name: &str, walker: GpuWalker, out: &mut String, seen: &mut Vec<
     let src = source(name).ok_or_else(|| ComposeError { file: name.into(), detail: "no such shader".into() })?;
     for line in src.lines() {
         if let Some(inc) = line.trim().strip_prefix("//!include ") {
-            let inc = inc.trim().replace("{TRAVERSAL}", walker.name());
-            compose_into(&inc, walker, out, seen)
+            let inc = inc.trim().replace("{TRAVERSAL}", walker.name()).replace("{HIT_FLOAT}", hit.name());
+            compose_into(&inc, (walker, hit), out, seen)
                 .map_err(|e| ComposeError { file: name.into(), detail: format!("including {inc}: {e}") })?;
         } else {
             out.push_str(line);

@@ -12,7 +12,7 @@ use wgpu::util::DeviceExt;
 use crate::context::{GpuContext, GpuError};
 use crate::kernel::{GpuWalker, Kernel};
 use crate::layout::{GpuRay, GridParams, HIT_BYTES, RAY_BYTES, STATS_BYTES, query_code};
-use crate::shaders::compose_with;
+use crate::shaders::{HitFloat, compose_for};
 use crate::upload::{GpuScene, GpuStructure};
 
 /// Threads per workgroup of every kernel (`@workgroup_size(64)`).
@@ -37,7 +37,7 @@ pub(crate) fn pipeline_walking(
     entry: &str,
     walker: GpuWalker,
 ) -> Result<wgpu::ComputePipeline, GpuError> {
-    let src = compose_with(file, walker)?;
+    let src = compose_for(file, walker, HitFloat::for_features(ctx.device.features()))?;
     let desc = wgpu::ShaderModuleDescriptor { label: Some(file), source: wgpu::ShaderSource::Wgsl(src.into()) };
     // Every check but wgpu's loop bounding, which adds a counter and a test to every iteration
     // of every loop, and the walks' loops are the kernels' hot paths (measured in the README's

@@ -473,7 +473,13 @@ pub fn wgpu_options() -> eframe::egui_wgpu::WgpuConfiguration {
         let mut limits = gridrt_gpu::context::required_limits(&offered);
         limits.max_texture_dimension_2d =
             offered.max_texture_dimension_2d.min(8192).max(limits.max_texture_dimension_2d);
-        wgpu::DeviceDescriptor { label: Some("gridrt app device"), required_limits: limits, ..Default::default() }
+        wgpu::DeviceDescriptor {
+            label: Some("gridrt app device"),
+            // f64 hits where the adapter has them (gridrt_gpu::shaders::HitFloat; not WebGPU).
+            required_features: adapter.features() & wgpu::Features::SHADER_F64,
+            required_limits: limits,
+            ..Default::default()
+        }
     });
     // WGPU_ADAPTER_NAME picks the adapter by name, as for the command line.
     #[cfg(not(target_arch = "wasm32"))]

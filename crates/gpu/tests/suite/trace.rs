@@ -6,6 +6,7 @@
 //! lies on a cell boundary and its t rounds differently (counted and reported).
 
 use glam::Vec3;
+use gridrt_gpu::shaders::HitFloat;
 use gridrt_gpu::trace::Tracer;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_grid::multires::{MultiresOptions, Policy};
@@ -15,7 +16,7 @@ use gridrt_grid::triangle::intersect;
 use gridrt_grid::{AnyGrid, GridConfig, GridKind, Resolution, Traversal, hierarchy, structure};
 use gridrt_scene::procedural::{self, SceneKind};
 use gridrt_scene::rays::{camera_rays, random_rays};
-use gridrt_scene::{Camera, Mesh, Ray};
+use gridrt_scene::{Camera, Hit, Mesh, Ray};
 
 use super::common::{gpu, hostile_scenes};
 
@@ -82,6 +83,7 @@ fn compare_with(
     base: &GridConfig,
 ) -> Tally {
     let ctx = gpu().expect("checked by caller");
+    let exact = HitFloat::for_features(ctx.device.features()) == HitFloat::F64;
     let scene = GpuScene::new(ctx, tris).unwrap();
     let tracer = Tracer::new();
     let b = gridrt_scene::Aabb::from_points(tris.iter().flatten());
@@ -96,6 +98,24 @@ fn compare_with(
                 let (cpu_hits, _) = grid.trace_batch(tris, rays, opts, true);
                 let cpu_stats: Vec<_> = rays.iter().map(|r| grid.trace(tris, r, opts).1).collect();
                 let (gpu_hits, gpu_stats) = tracer.trace(ctx, &scene, &gs, rays, opts).unwrap();
+                if exact {
+                    // f64 hits (shaders/shared/hit_f64.wgsl): the CPU's operations, so every hit
+                    // and every count is the CPU's, bit for bit.
+                    let bits = |h: Hit| (h.t.to_bits(), h.triangle, h.u.to_bits(), h.v.to_bits());
+                    let differ: Vec<usize> = (0..rays.len())
+                        .filter(|&i| bits(cpu_hits[i]) != bits(gpu_hits[i]) || cpu_stats[i] != gpu_stats[i])
+                        .collect();
+                    assert!(
+                        differ.is_empty(),
+                        "{name} {kind} {traversal} mailbox={mailbox}: f64 GPU hits differ from the CPU's on {} rays, e.g. ray {}: cpu {:?} {:?}, gpu {:?} {:?}",
+                        differ.len(),
+                        differ[0],
+                        cpu_hits[differ[0]],
+                        cpu_stats[differ[0]],
+                        gpu_hits[differ[0]],
+                        gpu_stats[differ[0]]
+                    );
+                }
                 let mut bad = Vec::new();
                 let mut ties = 0;
                 let mut cell_diff = Vec::new();
@@ -258,9 +278,17 @@ fn gpu_matches_cpu_on_hostile_scenes() {
         positions: tris.iter().flatten().copied().collect(),
         indices: (0..tris.len() as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect(),
     };
-    let walls = hostile_scenes().into_iter().find(|(n, _)| *n == "on cell walls").expect("a hostile scene").1;
-    let scenes =
-        [("far from the origin", far), ("on cell walls", mesh_of(walls)), ("coincident and degenerate", copies)];
+    let hostile = |name: &str| hostile_scenes().into_iter().find(|(n, _)| *n == name).expect("a hostile scene").1;
+    let mut scenes = vec![
+        ("far from the origin", far),
+        ("on cell walls", mesh_of(hostile("on cell walls"))),
+        ("coincident and degenerate", copies),
+    ];
+    // Coordinates of 1e29 overflow the f32 edge functions' products, which only the f64 hit test
+    // decides (shaders/shared/hit_f64.wgsl): with f32 hits such triangles are never hit.
+    if HitFloat::for_features(gpu().unwrap().device.features()) == HitFloat::F64 {
+        scenes.push(("huge (1e29)", mesh_of(hostile("huge (1e29)"))));
+    }
     compare_scenes(scenes.into_iter().map(|(name, mesh)| (name.to_string(), mesh)), &[true]);
 }
 
