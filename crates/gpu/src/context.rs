@@ -87,6 +87,12 @@ fn first_line(s: &str) -> String {
     s.lines().next().unwrap_or("unknown error").trim().to_string()
 }
 
+/// The features gridrt asks for, of those `adapter` offers: f64 in shaders, for hits bit-identical
+/// to the CPU's ([`crate::shaders::HitFloat`]; WebGPU offers none).
+pub fn required_features(adapter: wgpu::Features) -> wgpu::Features {
+    adapter & wgpu::Features::SHADER_F64
+}
+
 /// The limits gridrt asks for, within what `adapter` offers.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     let mut l = wgpu::Limits::downlevel_defaults().using_resolution(adapter.clone());
@@ -121,8 +127,7 @@ impl GpuContext {
         }
         let desc = wgpu::DeviceDescriptor {
             label: Some("gridrt device"),
-            // f64 in shaders where the adapter has it: bit-identical hits (shaders::HitFloat).
-            required_features: adapter.features() & wgpu::Features::SHADER_F64,
+            required_features: required_features(adapter.features()),
             required_limits: required_limits(&adapter.limits()),
             ..Default::default()
         };

@@ -2,8 +2,8 @@
 //! carry them, and their composition: a line `//!include shared/x.wgsl` is replaced by that
 //! file (itself composed), each file at most once per module. In an include path,
 //! `{TRAVERSAL}` stands for the walker the module is composed with (`aw`, `cw` or `liu`): each
-//! trace pipeline carries only its own walker's code and state; `{HIT_FLOAT}` for how a hit's t, u, v
-//! are computed ([`HitFloat`]: f64 where the device has it).
+//! trace pipeline carries only its own walker's code and state; `{HIT_FLOAT}` for how a hit's
+//! t, u, v are computed ([`HitFloat`]: f64 where the device has it).
 
 use crate::kernel::GpuWalker;
 

@@ -463,8 +463,8 @@ impl eframe::App for GridrtApp {
     }
 }
 
-/// wgpu setup shared by the native and web mains: the device asks for the limits gridrt's
-/// kernels need (within what the adapter offers), plus a texture size for large windows.
+/// wgpu setup shared by the native and web mains: the device asks for the features and limits
+/// gridrt's kernels need (within what the adapter offers), plus a texture size for large windows.
 pub fn wgpu_options() -> eframe::egui_wgpu::WgpuConfiguration {
     use eframe::egui_wgpu::{WgpuConfiguration, WgpuSetup, WgpuSetupCreateNew};
     let mut setup = WgpuSetupCreateNew::without_display_handle();
@@ -475,8 +475,7 @@ pub fn wgpu_options() -> eframe::egui_wgpu::WgpuConfiguration {
             offered.max_texture_dimension_2d.min(8192).max(limits.max_texture_dimension_2d);
         wgpu::DeviceDescriptor {
             label: Some("gridrt app device"),
-            // f64 hits where the adapter has them (gridrt_gpu::shaders::HitFloat; not WebGPU).
-            required_features: adapter.features() & wgpu::Features::SHADER_F64,
+            required_features: gridrt_gpu::context::required_features(adapter.features()),
             required_limits: limits,
             ..Default::default()
         }
