@@ -82,11 +82,11 @@ fn floor(v: f64) -> f64 {
 
 /// Bounds over the active rays of their lines' intercepts and slopes on the two other axes.
 #[derive(Clone, Copy, Debug)]
-struct Bounds {
-    c_lo: [f64; 2],
-    c_hi: [f64; 2],
-    slope_lo: [f64; 2],
-    slope_hi: [f64; 2],
+pub(crate) struct Bounds {
+    pub(crate) c_lo: [f64; 2],
+    pub(crate) c_hi: [f64; 2],
+    pub(crate) slope_lo: [f64; 2],
+    pub(crate) slope_hi: [f64; 2],
 }
 
 impl Bounds {
@@ -135,19 +135,52 @@ pub struct SliceRect {
     pub span: [(f64, f64); 3],
 }
 
-impl SliceRect {
-    /// Whether no active ray can meet triangle `tri` inside this slice: its bounding box in grid
-    /// space (computed as insertion computes it), widened by the insertion margin, misses the
-    /// region. Such a triangle is left for the slices where its box meets the rays (it is in
-    /// their cells too), and is not mailboxed here.
+/// A triangle's bounding box in grid space, computed as insertion computes it and widened by
+/// the insertion margin: per axis the lowest and highest grid coordinate a ray meeting the
+/// triangle can have there.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleBox {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+}
+
+impl TriangleBox {
     #[inline]
-    pub fn misses(&self, geom: &GridGeometry, tri: &[glam::Vec3; 3]) -> bool {
+    pub fn of(geom: &GridGeometry, tri: &[glam::Vec3; 3]) -> TriangleBox {
         let g = tri.map(|p| (p - geom.min) * geom.inv_cell);
         let (lo, hi) = (g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]));
         let m = crate::geometry::INSERT_MARGIN_CELLS;
-        (0..3).any(|k| (hi[k] as f64) + m < self.span[k].0 || (lo[k] as f64) - m > self.span[k].1)
+        TriangleBox { lo: lo.to_array().map(|v| v as f64 - m), hi: hi.to_array().map(|v| v as f64 + m) }
     }
 }
+
+impl SliceRect {
+    /// Whether no active ray can meet the triangle of box `b` inside this slice: the box misses
+    /// the region. Such a triangle is left for the slices where its box meets the rays (it is in
+    /// their cells too), and is not mailboxed here.
+    #[inline]
+    pub fn misses(&self, b: &TriangleBox) -> bool {
+        (0..3).any(|k| b.hi[k] < self.span[k].0 || b.lo[k] > self.span[k].1)
+    }
+}
+
+/// The coordinates on one axis that lines with intercepts in `c` (at the reference plane) and
+/// slopes in `slope` take where the walk axis is `ds` in `d` from the reference plane, widened
+/// by [`SLICE_MARGIN_CELLS`]: `c + slope · ds` is extreme at the intervals' corners. Plain
+/// comparisons (the values are finite, so no NaN arises) compile to single min and max
+/// instructions when eight of these run in lanes.
+#[inline(always)]
+pub(crate) fn lines_interval(c: (f64, f64), slope: (f64, f64), d: (f64, f64)) -> (f64, f64) {
+    let (min, max) = (|x: f64, y: f64| if x < y { x } else { y }, |x: f64, y: f64| if x > y { x } else { y });
+    let (p, q, r, s) = (slope.0 * d.0, slope.0 * d.1, slope.1 * d.0, slope.1 * d.1);
+    let m = SLICE_MARGIN_CELLS;
+    (c.0 + min(min(p, q), min(r, s)) - m, c.1 + max(max(p, q), max(r, s)) + m)
+}
+
+/// Bounds of some lanes' lines (a chunk of a packet's gathered rays), as [`SliceWalk`] keeps
+/// them for the whole packet.
+#[derive(Clone, Copy, Debug)]
+pub struct LineBounds(pub(crate) Bounds);
 
 /// The walk of one packet: axis, direction, steps and the frustum of its active rays.
 #[derive(Clone, Copy, Debug)]
@@ -249,6 +282,37 @@ impl SliceWalk {
             None => at(ends.1).unwrap_or_else(|| (0.0, Bounds::of(axis, 0.0, lanes, active, u32::MAX))),
         };
         Some(walk)
+    }
+
+    /// The bounds of the lines of `lanes[i]` for each `i` of `which`.
+    pub fn line_bounds(&self, lanes: &[Lane], which: impl Iterator<Item = u32>) -> LineBounds {
+        let a = self.axis;
+        let mut b = Bounds::EMPTY;
+        for i in which {
+            b.add([(a + 1) % 3, (a + 2) % 3], a, self.s_ref, &lanes[i as usize]);
+        }
+        LineBounds(b)
+    }
+
+    /// The walk axis' coordinate of the plane the lines' intercepts are taken at.
+    #[inline]
+    pub fn reference_plane(&self) -> f64 {
+        self.s_ref
+    }
+
+    /// Whether none of the lines of `lines` passes through the triangle box `b` anywhere: then
+    /// none of their rays can hit the triangle (a hit lies in the box, and a ray's line passes
+    /// within the slice margin of it). Over the box's extent on the walk axis each line's
+    /// coordinate on another axis is `c + slope · ds`, bounded by the intervals' corners.
+    #[inline]
+    pub fn lines_miss(&self, lines: &LineBounds, b: &TriangleBox) -> bool {
+        let a = self.axis;
+        let l = &lines.0;
+        let d = (b.lo[a] - self.s_ref, b.hi[a] - self.s_ref);
+        [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate().any(|(n, u)| {
+            let (lo, hi) = lines_interval((l.c_lo[n], l.c_hi[n]), (l.slope_lo[n], l.slope_hi[n]), d);
+            hi < b.lo[u] || lo > b.hi[u]
+        })
     }
 
     /// Whether walking the rays as a packet visits fewer cells than `ratio` times the cells

@@ -15,6 +15,10 @@
 //! A triangle whose bounding box (widened by the insertion margin) misses the region the rays
 //! cross in a slice is skipped there and not mailboxed ([`frustum::SliceRect::misses`]): no
 //! ray can meet it in that slice, and it is in the cells of every slice where one can.
+//! A triangle tested is tested only against the chunks of eight rays some of whose lines pass
+//! through its box over the box's whole depth: a spared chunk's rays miss it everywhere, so the
+//! mailbox stays valid. Whether a packet checks its chunks follows how many the checks spared
+//! in recent packets ([`CULL_WORTH`]).
 //!
 //! An occlusion query ([`Query::Any`]) ends a ray at its first hit instead, as for single rays.
 //!
@@ -151,7 +155,21 @@ pub struct Packet {
     active: Vec<u32>,
     rays: PacketRays,
     mailbox: Mailbox<PACKET_MAILBOX_SIZE>,
+    /// Chunks checked against triangles' boxes and chunks spared by it, over recent packets
+    /// (see [`CULL_WORTH`]).
+    cull_stats: [u64; 2],
+    /// Packets traced by this state.
+    traced: u64,
 }
+
+/// A packet checks its chunks of eight rays against each triangle's box (sparing those that
+/// pass away from it) while the checks spare at least this share of the chunks checked: a
+/// check costs about one chunk's pre-filter, so it pays where triangles are small next to the
+/// packet (LittlestTokyo, the scanned models) and not where they are large (the Cornell box).
+/// Every [`CULL_PROBE`]-th packet checks anyway, so the share follows the scene.
+pub const CULL_WORTH: f64 = 0.25;
+/// See [`CULL_WORTH`].
+pub const CULL_PROBE: u64 = 32;
 
 /// How a packet was traced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -190,6 +208,13 @@ impl Packet {
         self.best.resize(rays.len(), Hit::MISS);
         self.mailbox = Mailbox::default();
         self.rays.gather(&self.lanes, &self.active);
+        self.traced += 1;
+        let [checked, spared] = self.cull_stats;
+        let cull =
+            checked < 256 || spared as f64 >= CULL_WORTH * checked as f64 || self.traced.is_multiple_of(CULL_PROBE);
+        if checked > 1 << 14 {
+            self.cull_stats = [checked / 2, spared / 2];
+        }
         // Each lane's stats from running totals: cells of the slices since its first, tests of
         // every triangle tested while it was active.
         let (mut cells, mut tests) = (0u64, 0u64);
@@ -220,7 +245,8 @@ impl Packet {
             let (lo, hi) = (rect.lo, rect.hi);
             let n = (hi - lo + UVec3::ONE).as_u64vec3();
             cells += n.x * n.y * n.z;
-            let (best, mb, rays_soa) = (&mut self.best, &mut self.mailbox, &self.rays);
+            let (best, mb, rays_soa, cull_stats) =
+                (&mut self.best, &mut self.mailbox, &mut self.rays, &mut self.cull_stats);
             let mut changed = false;
             let geom = grid.geom();
             grid.for_each_occupied(lo, hi, &mut |refs| {
@@ -231,14 +257,18 @@ impl Packet {
                         continue;
                     }
                     let t = &tris[tri as usize];
-                    if rect.misses(geom, t) {
+                    let tb = frustum::TriangleBox::of(geom, t);
+                    if rect.misses(&tb) {
                         continue;
                     }
                     if mailbox {
                         mb.insert(tri);
                     }
                     tests += 1;
-                    changed |= rays_soa.test(t, tri, best);
+                    if cull && !rays_soa.chunks_bounded() {
+                        rays_soa.bound_chunks(lanes, &walk);
+                    }
+                    changed |= rays_soa.test(t, tri, best, cull.then_some((&walk, &tb)), cull_stats);
                 }
             });
             // No ray can leave before `next_check` unless some ray's best hit changed.

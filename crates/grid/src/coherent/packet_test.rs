@@ -12,7 +12,7 @@
 use glam::Vec3;
 use gridrt_scene::Hit;
 
-use super::frustum::Lane;
+use super::frustum::{Lane, LineBounds, SliceWalk, TriangleBox, lines_interval};
 use crate::ray::PreparedRay;
 use crate::triangle::{certainly_outside, intersect_prefiltered, keep_closer, shear};
 
@@ -45,10 +45,13 @@ pub struct PacketRays {
     oz: Vec<f32>,
     sx: Vec<f32>,
     sy: Vec<f32>,
+    /// Per chunk of eight, the bounds of its rays' lines (a triangle whose box none of them
+    /// passes through is not tested against the chunk).
+    chunk_lines: Vec<ChunkLines>,
 }
 
 impl PacketRays {
-    /// The rays of the `active` lanes (`lanes` many in the packet).
+    /// The rays of the `active` lanes (`lanes` many in the packet) of `walk`.
     pub fn gather(&mut self, lanes: &[Lane], active: &[u32]) {
         self.groups.clear();
         self.lane.clear();
@@ -83,6 +86,27 @@ impl PacketRays {
             }
             self.groups.push(Group { perm, start, len });
         }
+        self.chunk_lines.clear();
+    }
+
+    /// Whether [`PacketRays::bound_chunks`] has run since the last gather.
+    #[inline]
+    pub fn chunks_bounded(&self) -> bool {
+        !self.chunk_lines.is_empty()
+    }
+
+    /// The bounds of each chunk's lines (`lanes` of `walk`), for the tests that spare the
+    /// chunks a triangle's box lies away from. Computed when a packet first meets a triangle
+    /// smaller than its region: packets of large triangles never need them.
+    pub fn bound_chunks(&mut self, lanes: &[Lane], walk: &SliceWalk) {
+        self.chunk_lines.clear();
+        for (k, chunk) in self.lane.chunks(LANES).enumerate() {
+            if k.is_multiple_of(LANES) {
+                self.chunk_lines.push(ChunkLines::NONE);
+            }
+            let lines = walk.line_bounds(lanes, chunk.iter().copied().filter(|&i| i != u32::MAX));
+            self.chunk_lines[k / LANES].set(k % LANES, &lines);
+        }
     }
 
     /// Drops the ray of lane `i` (it is skipped from now on); returns the rays dropped since
@@ -110,9 +134,18 @@ impl PacketRays {
 
     /// Tests triangle `tri` (index `id`) against every gathered ray, keeping each lane's
     /// closest hit in `best`; true when some lane's hit changed.
+    /// With `cull`, each chunk whose lines all pass away from the triangle's box is spared
+    /// (counted in `cull_stats`: chunks checked, chunks spared).
     #[inline]
-    pub fn test(&self, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) -> bool {
-        test_rays(self, tri, id, best)
+    pub fn test(
+        &self,
+        tri: &[Vec3; 3],
+        id: u32,
+        best: &mut [Hit],
+        cull: Option<(&SliceWalk, &TriangleBox)>,
+        cull_stats: &mut [u64; 2],
+    ) -> bool {
+        test_rays(self, tri, id, best, cull, cull_stats)
     }
 }
 
@@ -123,13 +156,32 @@ impl PacketRays {
 /// same rays.
 #[allow(unsafe_code)] // the dispatch `multiversion` generates: a version runs only where its features are detected
 #[multiversion::multiversion(targets("x86_64+avx2+fma", "x86_64+avx"))]
-fn test_rays(rays: &PacketRays, tri: &[Vec3; 3], id: u32, best: &mut [Hit]) -> bool {
+fn test_rays(
+    rays: &PacketRays,
+    tri: &[Vec3; 3],
+    id: u32,
+    best: &mut [Hit],
+    cull: Option<(&SliceWalk, &TriangleBox)>,
+    cull_stats: &mut [u64; 2],
+) -> bool {
     let mut changed = false;
+    let mut live = u32::MAX;
     let p: &[f32; 9] = bytemuck::cast_ref(tri);
     for g in &rays.groups {
         let [kx, ky, kz] = g.perm;
         let corners = [0, 1, 2].map(|v| [p[3 * v + kx], p[3 * v + ky], p[3 * v + kz]]);
         for chunk in (g.start..g.start + g.len).step_by(LANES) {
+            let k = chunk / LANES;
+            if let Some((walk, b)) = cull {
+                if k.is_multiple_of(LANES) {
+                    live = rays.chunk_lines[k / LANES].meeting(walk.axis, walk.reference_plane(), b);
+                }
+                cull_stats[0] += 1;
+                if live & (1 << (k % LANES)) == 0 {
+                    cull_stats[1] += 1;
+                    continue;
+                }
+            }
             let lanes = |v: &[f32]| -> Lanes { v[chunk..chunk + LANES].try_into().expect("eight lanes") };
             let o = [lanes(&rays.ox), lanes(&rays.oy), lanes(&rays.oz)];
             let shear = [lanes(&rays.sx), lanes(&rays.sy)];
@@ -167,4 +219,140 @@ fn certainly_outside8(corners: &[[f32; 3]; 3], o: &[Lanes; 3], s: &[Lanes; 2]) -
         mask |= u32::from(outside) << l;
     }
     mask
+}
+
+/// The line bounds of eight chunks (a chunk's lane of each array), so that a triangle is
+/// checked against all eight at once ([`ChunkLines::meeting`]).
+#[derive(Clone, Copy, Debug)]
+struct ChunkLines {
+    /// Per axis other than the walk axis: the intercepts' and slopes' bounds.
+    c_lo: [[f64; LANES]; 2],
+    c_hi: [[f64; LANES]; 2],
+    slope_lo: [[f64; LANES]; 2],
+    slope_hi: [[f64; LANES]; 2],
+}
+
+impl ChunkLines {
+    /// No lines: every triangle misses them (an empty interval, with slopes that cannot make
+    /// a NaN).
+    const NONE: ChunkLines = ChunkLines {
+        c_lo: [[f64::INFINITY; LANES]; 2],
+        c_hi: [[f64::NEG_INFINITY; LANES]; 2],
+        slope_lo: [[0.0; LANES]; 2],
+        slope_hi: [[0.0; LANES]; 2],
+    };
+
+    fn set(&mut self, l: usize, lines: &LineBounds) {
+        let b = &lines.0;
+        for n in 0..2 {
+            // A chunk without a ray keeps `NONE`'s values.
+            if b.c_lo[n] <= b.c_hi[n] {
+                (self.c_lo[n][l], self.c_hi[n][l]) = (b.c_lo[n], b.c_hi[n]);
+                (self.slope_lo[n][l], self.slope_hi[n][l]) = (b.slope_lo[n], b.slope_hi[n]);
+            }
+        }
+    }
+
+    /// A bit per chunk some of whose lines pass through the triangle box `b` (walk axis `a`,
+    /// intercepts at plane `s_ref`): [`SliceWalk::lines_miss`] for eight chunks in lanes.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // `l` is the lane of every array
+    fn meeting(&self, a: usize, s_ref: f64, b: &TriangleBox) -> u32 {
+        let d = (b.lo[a] - s_ref, b.hi[a] - s_ref);
+        let mut miss = [false; LANES];
+        for (n, u) in [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate() {
+            for l in 0..LANES {
+                let c = (self.c_lo[n][l], self.c_hi[n][l]);
+                let (lo, hi) = lines_interval(c, (self.slope_lo[n][l], self.slope_hi[n][l]), d);
+                miss[l] |= (hi < b.lo[u]) | (lo > b.hi[u]);
+            }
+        }
+        let mut live = 0u32;
+        for (l, &x) in miss.iter().enumerate() {
+            live |= u32::from(!x) << l;
+        }
+        live
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::GridGeometry;
+    use gridrt_scene::rng::Rng;
+    use gridrt_scene::{Aabb, Ray};
+
+    /// Packets of rays (from a common origin, towards a common end, or scattered within a
+    /// cone) against small and large triangles near them: every ray that hits a triangle is in
+    /// a chunk the box check keeps, the eight-lane check equals the scalar one, and the check
+    /// spares chunks (it is not vacuous).
+    #[test]
+    fn the_chunk_check_keeps_every_ray_that_hits() {
+        let mut rng = Rng::new(19);
+        let bounds = Aabb { min: Vec3::new(-2.0, -1.0, -3.0), max: Vec3::new(5.0, 4.0, 2.0) };
+        let (mut kept_hits, mut spared) = (0, 0);
+        for case in 0..300 {
+            let geom = GridGeometry::new(
+                &bounds,
+                [3 + rng.below(40) as u32, 3 + rng.below(40) as u32, 3 + rng.below(40) as u32],
+            );
+            let inside = |rng: &mut Rng| Vec3::new(rng.range(-2.0, 5.0), rng.range(-1.0, 4.0), rng.range(-3.0, 2.0));
+            let (eye, target) = (inside(&mut rng) * 3.0, inside(&mut rng));
+            let spread = rng.range(0.001, 0.3);
+            let rays: Vec<Ray> = (0..64)
+                .map(|i| {
+                    let (dx, dy) = ((i % 8) as f32 - 3.5, (i / 8) as f32 - 3.5);
+                    let d = (target - eye).normalize() + spread * Vec3::new(dx, dy, 0.3 * dx - 0.2 * dy) / 8.0;
+                    match case % 3 {
+                        // A common origin (a camera tile).
+                        0 => Ray::new(eye, d, 0.0, f32::INFINITY),
+                        // A common end (shadow rays towards a light at `eye`).
+                        1 => {
+                            let o = eye + d * rng.range(2.0, 9.0);
+                            Ray::new(o, eye - o, 1e-4, 1.0)
+                        }
+                        // Nearby origins.
+                        _ => Ray::new(eye + Vec3::splat(rng.range(-0.2, 0.2)), d, 0.0, f32::INFINITY),
+                    }
+                })
+                .collect();
+            let (mut lanes, mut active) = (Vec::new(), Vec::new());
+            let Some(walk) = SliceWalk::new(&geom, &rays, &mut lanes, &mut active) else { continue };
+            let mut packet = PacketRays::default();
+            packet.gather(&lanes, &active);
+            packet.bound_chunks(&lanes, &walk);
+            for _ in 0..40 {
+                // A triangle around a point of one of the rays, of a random size.
+                let r = &rays[rng.below(64) as usize];
+                let p = r.at(rng.range(0.5, 1.0).min(r.tmax));
+                let size = [0.001, 0.05, 0.5, 3.0][rng.below(4) as usize];
+                let tri = [0; 3].map(|_| p + rng.unit_vector() * size);
+                let b = TriangleBox::of(&geom, &tri);
+                for (block, lines) in packet.chunk_lines.iter().enumerate() {
+                    let live = lines.meeting(walk.axis, walk.reference_plane(), &b);
+                    for l in 0..LANES {
+                        let k = block * LANES + l;
+                        let Some(chunk) = packet.lane.get(k * LANES..(k + 1) * LANES) else { continue };
+                        let scalar = walk.line_bounds(&lanes, chunk.iter().copied().filter(|&i| i != u32::MAX));
+                        let scalar_live = chunk.iter().any(|&i| i != u32::MAX) && !walk.lines_miss(&scalar, &b);
+                        assert_eq!(live & (1 << l) != 0, scalar_live, "case {case}: lanes and scalar disagree");
+                        for &i in chunk.iter().filter(|&&i| i != u32::MAX) {
+                            let ray = lanes[i as usize].ray.expect("gathered lanes are valid");
+                            let hit = crate::triangle::intersect(&ray, &tri)
+                                .is_some_and(|h| h.t >= rays[i as usize].tmin && h.t <= rays[i as usize].tmax);
+                            if hit {
+                                assert!(scalar_live, "case {case}: a chunk with a hit was spared");
+                                kept_hits += 1;
+                            }
+                        }
+                        spared += usize::from(!scalar_live);
+                    }
+                }
+            }
+        }
+        assert!(
+            kept_hits > 1000 && spared > 1000,
+            "the cases exercise the check: {kept_hits} hits kept, {spared} chunks spared"
+        );
+    }
 }
