@@ -52,7 +52,7 @@ pub enum SceneError {
     InvalidAccessor { source_name: String, at: PrimitiveRef, accessor: usize, semantic: &'static str, detail: String },
     #[error(
         "{source_name}: {at}: POSITION accessor {accessor} has {found} components; gridrt needs \
-         32-bit float VEC3 positions"
+         32-bit float VEC3 positions (or 8- and 16-bit integer ones under KHR_mesh_quantization)"
     )]
     NonFloatPositions { source_name: String, at: PrimitiveRef, accessor: usize, found: String },
     #[error("{source_name}: {at}: has no POSITION attribute")]

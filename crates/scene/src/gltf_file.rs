@@ -141,7 +141,8 @@ pub(crate) fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneErro
     }
     // Extensions a file requires change how its geometry is stored (compression, quantization);
     // gridrt reads plain accessors only, so say which one it is instead of failing obscurely.
-    if let Some(ext) = root.extensions_required.iter().find(|e| !GEOMETRY_NEUTRAL_EXTENSIONS.contains(&e.as_str())) {
+    let decoded = |e: &str| GEOMETRY_NEUTRAL_EXTENSIONS.contains(&e) || e == crate::gltf_load::MESH_QUANTIZATION;
+    if let Some(ext) = root.extensions_required.iter().find(|e| !decoded(e)) {
         return Err(SceneError::Unsupported {
             source_name: name.into(),
             detail: format!(

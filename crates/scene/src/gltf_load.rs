@@ -124,6 +124,9 @@ fn root_nodes(doc: &gltf::Document) -> Vec<usize> {
     }
 }
 
+/// The extension that allows integer positions (decoded in [`Loader::decode_primitive`]).
+pub(crate) const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
+
 struct Loader<'a> {
     name: String,
     doc: &'a gltf::Document,
@@ -269,7 +272,12 @@ impl Loader<'_> {
         let Some(pos) = prim.get(&gltf::Semantic::Positions) else {
             return Err(SceneError::MissingPositions { source_name: self.name.clone(), at });
         };
-        if pos.data_type() != DataType::F32 || pos.dimensions() != Dimensions::Vec3 || pos.normalized() {
+        // Float positions, or under KHR_mesh_quantization 8- and 16-bit integers (normalized or
+        // not), whose values the accessor rules decode and the node transforms dequantize.
+        let float = pos.data_type() == DataType::F32 && !pos.normalized();
+        let quantized = matches!(pos.data_type(), DataType::I8 | DataType::U8 | DataType::I16 | DataType::U16)
+            && self.doc.extensions_used().any(|e| e == MESH_QUANTIZATION);
+        if !(float || quantized) || pos.dimensions() != Dimensions::Vec3 {
             return Err(SceneError::NonFloatPositions {
                 source_name: self.name.clone(),
                 at,

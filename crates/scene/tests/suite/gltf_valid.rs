@@ -148,3 +148,60 @@ fn every_shared_scene_loads() {
         assert!(mesh.triangle_count() > 0 && report.triangles == mesh.triangle_count());
     }
 }
+
+/// KHR_mesh_quantization: 8- and 16-bit integer positions, normalized or not, decoded by the
+/// accessor rules and dequantized by the node's transform; refused without the extension.
+#[test]
+fn quantized_positions_load_under_khr_mesh_quantization() {
+    // (component type, normalized, the three corners' raw values, what one unit decodes to)
+    let cases: [(u32, bool, [[i32; 3]; 3], f32); 5] = [
+        (5122, true, [[0, 0, 0], [32767, 0, 0], [0, -32767, 16384]], 1.0 / 32767.0),
+        (5123, true, [[0, 0, 0], [65535, 0, 0], [0, 65535, 1000]], 1.0 / 65535.0),
+        (5120, true, [[0, 0, 0], [127, 0, 0], [0, -127, 64]], 1.0 / 127.0),
+        (5121, false, [[0, 0, 0], [200, 0, 0], [0, 3, 9]], 1.0),
+        (5122, false, [[-3, 0, 0], [1000, 0, 0], [0, -20, 7]], 1.0),
+    ];
+    for (ct, normalized, raw, unit) in cases {
+        let size = if matches!(ct, 5120 | 5121) { 1 } else { 2 };
+        // Each vertex padded to four bytes, as the extension's alignment rule asks.
+        let mut bytes = Vec::new();
+        for v in raw {
+            for c in v {
+                bytes.extend_from_slice(&c.to_le_bytes()[..size]);
+            }
+            bytes.resize(bytes.len().next_multiple_of(4), 0);
+        }
+        let build = |with_extension: bool| {
+            let mut d = Doc::new();
+            let view = d.view(&bytes);
+            d.json["bufferViews"][view]["byteStride"] = json!(4 * (3 * size).div_ceil(4));
+            let p = d.push(
+                "accessors",
+                json!({"bufferView": view, "componentType": ct, "normalized": normalized, "count": 3, "type": "VEC3"}),
+            );
+            let m = d.mesh(p, None, 4);
+            let n = d.node(json!({"mesh": m, "scale": [2.0, 2.0, 2.0], "translation": [1.0, 0.0, 0.0]}));
+            d.root(n);
+            if with_extension {
+                d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+                d.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+            }
+            d.glb()
+        };
+        let (mesh, _) = load_slice(&build(true), "quantized.glb", None).unwrap();
+        let decode = |c: i32| {
+            let v = if normalized { (c as f32 * unit).max(-1.0) } else { c as f32 };
+            2.0 * v
+        };
+        let expected = raw.map(|v| [decode(v[0]) + 1.0, decode(v[1]), decode(v[2])]);
+        let got = mesh.triangle(0).map(|p| p.to_array());
+        for (g, e) in got.iter().flatten().zip(expected.iter().flatten()) {
+            assert!(
+                (g - e).abs() <= 1e-6 * e.abs().max(1.0),
+                "type {ct} normalized {normalized}: {got:?} against {expected:?}"
+            );
+        }
+        let refused = load_slice(&build(false), "integer.glb", None).unwrap_err();
+        assert!(refused.to_string().contains("KHR_mesh_quantization"), "{refused}");
+    }
+}
