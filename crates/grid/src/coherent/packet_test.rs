@@ -48,43 +48,66 @@ pub struct PacketRays {
     /// Per chunk of eight, the bounds of its rays' lines (a triangle whose box none of them
     /// passes through is not tested against the chunk).
     chunk_lines: Vec<ChunkLines>,
+    /// Each active lane's permutation code while gathering.
+    codes: Vec<u8>,
 }
 
 impl PacketRays {
-    /// The rays of the `active` lanes (`lanes` many in the packet) of `walk`.
+    /// The rays of the `active` lanes (`lanes` many in the packet), by permutation.
     pub fn gather(&mut self, lanes: &[Lane], active: &[u32]) {
+        // The permutation is fixed by the dominant axis kz and whether kx, ky are swapped.
+        let code = |r: &PreparedRay| r.kz * 2 + (r.kx != (r.kz + 1) % 3) as usize;
+        let ray = |i: u32| lanes[i as usize].ray.expect("active lanes are valid");
+        // A counting sort by permutation: each group's place, padded to whole chunks.
+        let mut count = [0usize; 6];
+        let mut perm = [[0usize; 3]; 6];
+        self.codes.clear();
+        for &i in active {
+            let r = ray(i);
+            let c = code(&r);
+            count[c] += 1;
+            perm[c] = [r.kx, r.ky, r.kz];
+            self.codes.push(c as u8);
+        }
         self.groups.clear();
+        let mut next = [0usize; 6];
+        let mut total = 0;
+        for c in (0..6).filter(|&c| count[c] > 0) {
+            self.groups.push(Group { perm: perm[c], start: total, len: count[c] });
+            next[c] = total;
+            total += count[c].next_multiple_of(LANES);
+        }
         self.lane.clear();
+        self.lane.resize(total, u32::MAX);
         self.ray.clear();
+        if let Some(&first) = active.first() {
+            self.ray.resize(total, ray(first));
+        }
         for v in [&mut self.ox, &mut self.oy, &mut self.oz, &mut self.sx, &mut self.sy] {
             v.clear();
+            v.resize(total, 0.0);
         }
         self.pos.clear();
         self.pos.resize(lanes.len(), u32::MAX);
         self.dead = 0;
-        // The permutation is fixed by the dominant axis kz and whether kx, ky are swapped.
-        let code = |r: &PreparedRay| r.kz * 2 + (r.kx != (r.kz + 1) % 3) as usize;
-        let mut present = [false; 6];
-        for &i in active {
-            present[code(lanes[i as usize].ray.as_ref().expect("active lanes are valid"))] = true;
+        for (&i, &c) in active.iter().zip(&self.codes) {
+            let k = next[c as usize];
+            next[c as usize] += 1;
+            let r = ray(i);
+            self.pos[i as usize] = k as u32;
+            self.lane[k] = i;
+            self.ray[k] = r;
+            (self.ox[k], self.oy[k], self.oz[k]) = (r.org_k[0], r.org_k[1], r.org_k[2]);
+            (self.sx[k], self.sy[k]) = (r.sx, r.sy);
         }
-        for (c, _) in present.iter().enumerate().filter(|(_, p)| **p) {
-            let start = self.lane.len();
-            let mut perm = [0; 3];
-            for &i in active {
-                let r = lanes[i as usize].ray.expect("active lanes are valid");
-                if code(&r) == c {
-                    perm = [r.kx, r.ky, r.kz];
-                    self.pos[i as usize] = self.lane.len() as u32;
-                    self.push(i, r);
-                }
+        // Padding lanes (lane `u32::MAX`) repeat their group's first ray: finite values, never
+        // a hit recorded.
+        for g in &self.groups {
+            for k in g.start + g.len..g.start + g.len.next_multiple_of(LANES) {
+                (self.ray[k], self.ox[k], self.oy[k], self.oz[k]) =
+                    (self.ray[g.start], self.ox[g.start], self.oy[g.start], self.oz[g.start]);
+                (self.sx[k], self.sy[k]) = (self.sx[g.start], self.sy[g.start]);
             }
-            let len = self.lane.len() - start;
-            let filler = self.ray[start];
-            while !(self.lane.len() - start).is_multiple_of(LANES) {
-                self.push(u32::MAX, filler);
-            }
-            self.groups.push(Group { perm, start, len });
         }
         self.chunk_lines.clear();
     }
@@ -96,8 +119,8 @@ impl PacketRays {
     }
 
     /// The bounds of each chunk's lines (`lanes` of `walk`), for the tests that spare the
-    /// chunks a triangle's box lies away from. Computed when a packet first meets a triangle
-    /// smaller than its region: packets of large triangles never need them.
+    /// chunks a triangle's box lies away from. Computed when a packet first checks its chunks
+    /// (packets that test no triangle, or do not check, never need them).
     pub fn bound_chunks(&mut self, lanes: &[Lane], walk: &SliceWalk) {
         self.chunk_lines.clear();
         for (k, chunk) in self.lane.chunks(LANES).enumerate() {
@@ -120,16 +143,6 @@ impl PacketRays {
             self.dead += 1;
         }
         self.dead
-    }
-
-    fn push(&mut self, lane: u32, r: PreparedRay) {
-        self.lane.push(lane);
-        self.ray.push(r);
-        self.ox.push(r.org_k[0]);
-        self.oy.push(r.org_k[1]);
-        self.oz.push(r.org_k[2]);
-        self.sx.push(r.sx);
-        self.sy.push(r.sy);
     }
 
     /// Tests triangle `tri` (index `id`) against every gathered ray, keeping each lane's
