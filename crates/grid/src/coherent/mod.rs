@@ -170,6 +170,10 @@ pub struct Packet {
 pub const CULL_WORTH: f64 = 0.25;
 /// See [`CULL_WORTH`].
 pub const CULL_PROBE: u64 = 32;
+/// Chunks checked before the share spared decides (a thread's first packets always check).
+pub const CULL_WARM_UP: u64 = 256;
+/// Beyond this many chunks checked the counts are halved, so they follow recent packets.
+pub const CULL_WINDOW: u64 = 1 << 14;
 
 /// How a packet was traced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -210,9 +214,10 @@ impl Packet {
         self.rays.gather(&self.lanes, &self.active);
         self.traced += 1;
         let [checked, spared] = self.cull_stats;
-        let cull =
-            checked < 256 || spared as f64 >= CULL_WORTH * checked as f64 || self.traced.is_multiple_of(CULL_PROBE);
-        if checked > 1 << 14 {
+        let cull = checked < CULL_WARM_UP
+            || spared as f64 >= CULL_WORTH * checked as f64
+            || self.traced.is_multiple_of(CULL_PROBE);
+        if checked > CULL_WINDOW {
             self.cull_stats = [checked / 2, spared / 2];
         }
         // Each lane's stats from running totals: cells of the slices since its first, tests of
