@@ -273,7 +273,8 @@ impl Packet {
                     if cull && !rays_soa.chunks_bounded() {
                         rays_soa.bound_chunks(lanes, &walk);
                     }
-                    changed |= rays_soa.test(t, tri, best, cull.then_some((&walk, &tb)), cull_stats);
+                    let test = packet_test::TriangleTest { tri: t, id: tri, cull: cull.then_some((&walk, &tb)) };
+                    changed |= rays_soa.test(&test, best, cull_stats);
                 }
             });
             // No ray can leave before `next_check` unless some ray's best hit changed.

@@ -145,21 +145,22 @@ impl PacketRays {
         self.dead
     }
 
-    /// Tests triangle `tri` (index `id`) against every gathered ray, keeping each lane's
-    /// closest hit in `best`; true when some lane's hit changed.
-    /// With `cull`, each chunk whose lines all pass away from the triangle's box is spared
+    /// Tests triangle `t` against every gathered ray, keeping each lane's closest hit in
+    /// `best`; true when some lane's hit changed. With `t.cull`, each chunk whose lines all pass away from the triangle's box is spared
     /// (counted in `cull_stats`: chunks checked, chunks spared).
     #[inline]
-    pub fn test(
-        &self,
-        tri: &[Vec3; 3],
-        id: u32,
-        best: &mut [Hit],
-        cull: Option<(&SliceWalk, &TriangleBox)>,
-        cull_stats: &mut [u64; 2],
-    ) -> bool {
-        test_rays(self, tri, id, best, cull, cull_stats)
+    pub fn test(&self, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut [u64; 2]) -> bool {
+        test_rays(self, t, best, cull_stats)
     }
+}
+
+/// A triangle a packet tests: its corners, its index and, when the packet checks its chunks
+/// of rays against the triangle's box, the walk and the box.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleTest<'a> {
+    pub tri: &'a [Vec3; 3],
+    pub id: u32,
+    pub cull: Option<(&'a SliceWalk, &'a TriangleBox)>,
 }
 
 /// [`PacketRays::test`], compiled for AVX2 and AVX besides the baseline and chosen at run time
@@ -169,14 +170,8 @@ impl PacketRays {
 /// same rays.
 #[allow(unsafe_code)] // the dispatch `multiversion` generates: a version runs only where its features are detected
 #[multiversion::multiversion(targets("x86_64+avx2+fma", "x86_64+avx"))]
-fn test_rays(
-    rays: &PacketRays,
-    tri: &[Vec3; 3],
-    id: u32,
-    best: &mut [Hit],
-    cull: Option<(&SliceWalk, &TriangleBox)>,
-    cull_stats: &mut [u64; 2],
-) -> bool {
+fn test_rays(rays: &PacketRays, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut [u64; 2]) -> bool {
+    let TriangleTest { tri, id, cull } = *t;
     let mut changed = false;
     let mut live = u32::MAX;
     let p: &[f32; 9] = bytemuck::cast_ref(tri);
