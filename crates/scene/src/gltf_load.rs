@@ -104,7 +104,8 @@ pub fn load_rigged_slice_with(
     let buffers = gltf::import_buffers(&doc, base_dir, gltf.blob).map_err(|e| map_gltf_error(e, &name))?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|d| &d.0[..]).collect();
     crate::animation_data::validate(&doc, &name)?;
-    Loader { name, doc: &doc, buffers: &buffers }.load(&roots, plan)
+    let quantized = doc.extensions_used().any(|e| e == MESH_QUANTIZATION);
+    Loader { name, doc: &doc, buffers: &buffers, quantized }.load(&roots, plan)
 }
 
 /// The root nodes of the default scene (or scene 0 when none is marked default; or, in a file
@@ -131,6 +132,8 @@ struct Loader<'a> {
     name: String,
     doc: &'a gltf::Document,
     buffers: &'a [&'a [u8]],
+    /// Whether the file uses KHR_mesh_quantization (integer positions allowed).
+    quantized: bool,
 }
 
 /// What the depth-first walk of the scene carries: the decoded meshes, which subtrees to
@@ -275,8 +278,8 @@ impl Loader<'_> {
         // Float positions, or under KHR_mesh_quantization 8- and 16-bit integers (normalized or
         // not), whose values the accessor rules decode and the node transforms dequantize.
         let float = pos.data_type() == DataType::F32 && !pos.normalized();
-        let quantized = matches!(pos.data_type(), DataType::I8 | DataType::U8 | DataType::I16 | DataType::U16)
-            && self.doc.extensions_used().any(|e| e == MESH_QUANTIZATION);
+        let quantized =
+            matches!(pos.data_type(), DataType::I8 | DataType::U8 | DataType::I16 | DataType::U16) && self.quantized;
         if !(float || quantized) || pos.dimensions() != Dimensions::Vec3 {
             return Err(SceneError::NonFloatPositions {
                 source_name: self.name.clone(),

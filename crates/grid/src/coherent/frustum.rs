@@ -100,13 +100,15 @@ impl Bounds {
     /// The bounds over the `active` lanes started by step `j` of their lines on the two axes
     /// other than `a`, with intercepts at plane `s_ref`.
     fn of(a: usize, s_ref: f64, lanes: &[Lane], active: &[u32], j: u32) -> Bounds {
+        Bounds::over(a, s_ref, lanes, active.iter().copied().filter(|&i| lanes[i as usize].first <= j))
+    }
+
+    /// The bounds over the lines of `lanes[i]` for each `i` of `which`.
+    fn over(a: usize, s_ref: f64, lanes: &[Lane], which: impl Iterator<Item = u32>) -> Bounds {
         let others = [(a + 1) % 3, (a + 2) % 3];
         let mut b = Bounds::EMPTY;
-        for &i in active {
-            let l = &lanes[i as usize];
-            if l.first <= j {
-                b.add(others, a, s_ref, l);
-            }
+        for i in which {
+            b.add(others, a, s_ref, &lanes[i as usize]);
         }
         b
     }
@@ -286,33 +288,13 @@ impl SliceWalk {
 
     /// The bounds of the lines of `lanes[i]` for each `i` of `which`.
     pub fn line_bounds(&self, lanes: &[Lane], which: impl Iterator<Item = u32>) -> LineBounds {
-        let a = self.axis;
-        let mut b = Bounds::EMPTY;
-        for i in which {
-            b.add([(a + 1) % 3, (a + 2) % 3], a, self.s_ref, &lanes[i as usize]);
-        }
-        LineBounds(b)
+        LineBounds(Bounds::over(self.axis, self.s_ref, lanes, which))
     }
 
     /// The walk axis' coordinate of the plane the lines' intercepts are taken at.
     #[inline]
     pub fn reference_plane(&self) -> f64 {
         self.s_ref
-    }
-
-    /// Whether none of the lines of `lines` passes through the triangle box `b` anywhere: then
-    /// none of their rays can hit the triangle (a hit lies in the box, and a ray's line passes
-    /// within the slice margin of it). Over the box's extent on the walk axis each line's
-    /// coordinate on another axis is `c + slope · ds`, bounded by the intervals' corners.
-    #[inline]
-    pub fn lines_miss(&self, lines: &LineBounds, b: &TriangleBox) -> bool {
-        let a = self.axis;
-        let l = &lines.0;
-        let d = (b.lo[a] - self.s_ref, b.hi[a] - self.s_ref);
-        [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate().any(|(n, u)| {
-            let (lo, hi) = lines_interval((l.c_lo[n], l.c_hi[n]), (l.slope_lo[n], l.slope_hi[n]), d);
-            hi < b.lo[u] || lo > b.hi[u]
-        })
     }
 
     /// Whether walking the rays as a packet visits fewer cells than `ratio` times the cells

@@ -157,7 +157,7 @@ pub struct Packet {
     mailbox: Mailbox<PACKET_MAILBOX_SIZE>,
     /// Chunks checked against triangles' boxes and chunks spared by it, over recent packets
     /// (see [`CULL_WORTH`]).
-    cull_stats: [u64; 2],
+    cull_stats: packet_test::CullStats,
     /// Packets traced by this state.
     traced: u64,
 }
@@ -213,12 +213,12 @@ impl Packet {
         self.mailbox = Mailbox::default();
         self.rays.gather(&self.lanes, &self.active);
         self.traced += 1;
-        let [checked, spared] = self.cull_stats;
+        let packet_test::CullStats { checked, spared } = self.cull_stats;
         let cull = checked < CULL_WARM_UP
             || spared as f64 >= CULL_WORTH * checked as f64
             || self.traced.is_multiple_of(CULL_PROBE);
         if checked > CULL_WINDOW {
-            self.cull_stats = [checked / 2, spared / 2];
+            self.cull_stats = packet_test::CullStats { checked: checked / 2, spared: spared / 2 };
         }
         // Each lane's stats from running totals: cells of the slices since its first, tests of
         // every triangle tested while it was active.

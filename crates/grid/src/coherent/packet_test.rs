@@ -147,11 +147,18 @@ impl PacketRays {
 
     /// Tests triangle `t` against every gathered ray, keeping each lane's closest hit in
     /// `best`; true when some lane's hit changed. With `t.cull`, each chunk whose lines all pass away from the triangle's box is spared
-    /// (counted in `cull_stats`: chunks checked, chunks spared).
+    /// (counted in `cull_stats`).
     #[inline]
-    pub fn test(&self, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut [u64; 2]) -> bool {
+    pub fn test(&self, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut CullStats) -> bool {
         test_rays(self, t, best, cull_stats)
     }
+}
+
+/// Chunks of rays checked against triangles' boxes, and how many of them the checks spared.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CullStats {
+    pub checked: u64,
+    pub spared: u64,
 }
 
 /// A triangle a packet tests: its corners, its index and, when the packet checks its chunks
@@ -170,7 +177,7 @@ pub struct TriangleTest<'a> {
 /// same rays.
 #[allow(unsafe_code)] // the dispatch `multiversion` generates: a version runs only where its features are detected
 #[multiversion::multiversion(targets("x86_64+avx2+fma", "x86_64+avx"))]
-fn test_rays(rays: &PacketRays, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut [u64; 2]) -> bool {
+fn test_rays(rays: &PacketRays, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut CullStats) -> bool {
     let TriangleTest { tri, id, cull } = *t;
     let mut changed = false;
     let mut live = u32::MAX;
@@ -184,9 +191,9 @@ fn test_rays(rays: &PacketRays, t: &TriangleTest, best: &mut [Hit], cull_stats: 
                 if k.is_multiple_of(LANES) {
                     live = rays.chunk_lines[k / LANES].meeting(walk.axis, walk.reference_plane(), b);
                 }
-                cull_stats[0] += 1;
+                cull_stats.checked += 1;
                 if live & (1 << (k % LANES)) == 0 {
-                    cull_stats[1] += 1;
+                    cull_stats.spared += 1;
                     continue;
                 }
             }
@@ -262,7 +269,9 @@ impl ChunkLines {
     }
 
     /// A bit per chunk some of whose lines pass through the triangle box `b` (walk axis `a`,
-    /// intercepts at plane `s_ref`): [`SliceWalk::lines_miss`] for eight chunks in lanes.
+    /// intercepts at plane `s_ref`): then, and only then, can one of its rays hit the triangle
+    /// (a hit lies in the box, and a ray's line passes within the slice margin of it). Each
+    /// lane is the scalar rule [`lines_interval`] over the box's extent on the walk axis.
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // `l` is the lane of every array
     fn meeting(&self, a: usize, s_ref: f64, b: &TriangleBox) -> u32 {
@@ -289,6 +298,16 @@ mod tests {
     use crate::geometry::GridGeometry;
     use gridrt_scene::rng::Rng;
     use gridrt_scene::{Aabb, Ray};
+
+    /// The scalar rule for one chunk: whether none of its lines passes through `b`.
+    fn lines_miss(walk: &SliceWalk, lines: &LineBounds, b: &TriangleBox) -> bool {
+        let (a, l) = (walk.axis, &lines.0);
+        let d = (b.lo[a] - walk.reference_plane(), b.hi[a] - walk.reference_plane());
+        [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate().any(|(n, u)| {
+            let (lo, hi) = lines_interval((l.c_lo[n], l.c_hi[n]), (l.slope_lo[n], l.slope_hi[n]), d);
+            hi < b.lo[u] || lo > b.hi[u]
+        })
+    }
 
     /// Packets of rays (from a common origin, towards a common end, or scattered within a
     /// cone) against small and large triangles near them: every ray that hits a triangle is in
@@ -342,7 +361,7 @@ mod tests {
                         let k = block * LANES + l;
                         let Some(chunk) = packet.lane.get(k * LANES..(k + 1) * LANES) else { continue };
                         let scalar = walk.line_bounds(&lanes, chunk.iter().copied().filter(|&i| i != u32::MAX));
-                        let scalar_live = chunk.iter().any(|&i| i != u32::MAX) && !walk.lines_miss(&scalar, &b);
+                        let scalar_live = chunk.iter().any(|&i| i != u32::MAX) && !lines_miss(&walk, &scalar, &b);
                         assert_eq!(live & (1 << l) != 0, scalar_live, "case {case}: lanes and scalar disagree");
                         for &i in chunk.iter().filter(|&&i| i != u32::MAX) {
                             let ray = lanes[i as usize].ray.expect("gathered lanes are valid");
