@@ -48,11 +48,10 @@ pub const DEFAULT_TILE: u32 = 8;
 pub const PACKET_MAILBOX_SIZE: usize = 256;
 
 /// A packet walks slice by slice only when its frustum covers at most this many times the
-/// cells its rays cross one by one; otherwise its rays are traced singly. A frustum cell costs
-/// more than a single ray's (its triangles meet the whole packet): with triangle culling and the
-/// AVX2 test, 0.5 traced LittlestTokyo's shadow rays 1.2× faster than 1 (0.25: 1.3×), Sponza's
-/// and the bunny's alike within noise.
-pub const COHERENCE_RATIO: f64 = 0.5;
+/// cells its rays cross one by one (their whole segments: an occlusion query or an early hit
+/// ends a single ray sooner, so the ratio is low); otherwise its rays are traced singly. The
+/// README's packet levers (coherent grid traversal) have the measurements behind the value.
+pub const COHERENCE_RATIO: f64 = 0.2;
 
 /// A grid a packet can walk slice by slice: its geometry and the occupied cells of a box.
 pub trait SliceCells {
