@@ -139,9 +139,14 @@ pub(crate) fn validate(doc: &gltf::Document, name: &str) -> Result<(), SceneErro
             }
         }
     }
-    // Extensions a file requires change how its geometry is stored (compression, quantization);
-    // gridrt reads plain accessors only, so say which one it is instead of failing obscurely.
-    let decoded = |e: &str| GEOMETRY_NEUTRAL_EXTENSIONS.contains(&e) || e == crate::gltf_load::MESH_QUANTIZATION;
+    // Extensions a file requires change how its geometry is stored (compression, quantization,
+    // instancing); gridrt reads plain accessors, quantized positions and instances, so say which
+    // other one it is instead of failing obscurely.
+    let decoded = |e: &str| {
+        GEOMETRY_NEUTRAL_EXTENSIONS.contains(&e)
+            || e == crate::gltf_load::MESH_QUANTIZATION
+            || e == crate::instancing::MESH_GPU_INSTANCING
+    };
     if let Some(ext) = root.extensions_required.iter().find(|e| !decoded(e)) {
         return Err(SceneError::Unsupported {
             source_name: name.into(),

@@ -5,7 +5,8 @@
 //! 1. the nodes of the default scene (or scene 0 when none is marked default; or, in a file with
 //!    no scenes, every root node in index order) are visited **depth-first in document order**:
 //!    a node, then its children in the order of its `children` array;
-//! 2. for each visited node with a mesh, that mesh's primitives in order;
+//! 2. for each visited node with a mesh, that mesh's primitives in order; a node with
+//!    `EXT_mesh_gpu_instancing` repeats them once per instance, in instance order;
 //! 3. within a primitive, triangles in index order: `TRIANGLES` takes indices `3i, 3i+1, 3i+2`;
 //!    `TRIANGLE_STRIP` triangle `i` is `(i, i+1, i+2)` for even `i` and `(i+1, i, i+2)` for odd
 //!    `i` (the glTF winding rule); `TRIANGLE_FAN` triangle `i` is `(i+1, i+2, 0)`.
@@ -32,6 +33,7 @@ use crate::accessor::{AccessorFault, read_components, read_uint, view_bytes};
 use crate::error::{PrimitiveRef, SceneError};
 pub use crate::gltf_file::MAX_FILE_BYTES;
 use crate::gltf_file::{map_gltf_error, precheck, precheck_external_buffers, read_file_bounded, validate};
+use crate::instancing::NodeInstancing;
 pub use crate::load_budget::{LoadLimits, MAX_TRIANGLES};
 use crate::mesh::{LoadReport, Mesh};
 use crate::pose::{PoseScratch, Rig, RigBuilder};
@@ -238,18 +240,27 @@ impl Loader<'_> {
         }
         let visit = rig.visit(idx, parent);
         if let Some(mesh) = node.mesh() {
-            for prim in meshes[mesh.index()].iter().flatten() {
-                let total = out.indices.len() as u64 + prim.triangles.len() as u64;
-                if total > MAX_TRIANGLES {
-                    return Err(SceneError::TooLarge {
-                        source_name: self.name.clone(),
-                        what: "triangle count after instancing",
-                        count: total,
-                        limit: MAX_TRIANGLES,
-                    });
+            // EXT_mesh_gpu_instancing: the primitives once per instance, instance after instance.
+            let placements: Vec<Option<u32>> = match NodeInstancing::of(self.doc, node, &self.name)? {
+                Some(gpu) => {
+                    rig.placements(idx, || gpu.matrices(self.doc, self.buffers, idx, &self.name))?.map(Some).collect()
                 }
-                let base = rig.instance(visit, idx, prim.id);
-                out.indices.extend(prim.triangles.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+                None => vec![None],
+            };
+            for placement in placements {
+                for prim in meshes[mesh.index()].iter().flatten() {
+                    let total = out.indices.len() as u64 + prim.triangles.len() as u64;
+                    if total > MAX_TRIANGLES {
+                        return Err(SceneError::TooLarge {
+                            source_name: self.name.clone(),
+                            what: "triangle count after instancing",
+                            count: total,
+                            limit: MAX_TRIANGLES,
+                        });
+                    }
+                    let base = rig.instance(visit, idx, prim.id, placement);
+                    out.indices.extend(prim.triangles.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+                }
             }
         }
         path.push(idx);

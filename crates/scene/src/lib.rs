@@ -10,6 +10,7 @@ mod file_read;
 pub mod glb_write;
 pub mod gltf_file;
 pub mod gltf_load;
+pub(crate) mod instancing;
 pub mod load_budget;
 pub mod mesh;
 pub mod pose;

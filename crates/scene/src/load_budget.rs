@@ -213,6 +213,14 @@ pub(crate) fn check(
     let (mut triangles, mut vertices, mut worst) = (0u128, 0u128, (0usize, 0u128));
     for node in doc.nodes() {
         let Some(mesh) = node.mesh() else { continue };
+        // EXT_mesh_gpu_instancing: the mesh once per instance, wherever the node is reached.
+        if let Some(gpu) = crate::instancing::NodeInstancing::of(doc, &node, name)? {
+            if inst[node.index()] > 0 {
+                let at = || format!("node {}: {} instances", node.index(), gpu.count);
+                c.add(at, gpu.count as u64, gpu.bytes_per_instance())?;
+            }
+            inst[node.index()] = inst[node.index()].saturating_mul(gpu.count as u128);
+        }
         let t = inst[node.index()].saturating_mul(mesh_tris[mesh.index()] as u128);
         triangles = triangles.saturating_add(t);
         vertices = vertices.saturating_add(inst[node.index()].saturating_mul(mesh_verts[mesh.index()] as u128));

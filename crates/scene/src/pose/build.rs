@@ -29,6 +29,9 @@ pub(crate) struct RigBuilder<'a> {
     node_visit: Vec<u32>,
     primitives: Vec<Primitive>,
     instances: Vec<Instance>,
+    placements: Vec<DMat4>,
+    /// Per node, its instancing matrices' range in `placements` (read at its first visit).
+    node_placements: Vec<Option<std::ops::Range<u32>>>,
     vertex_count: usize,
     /// Per node, its skin when it has a mesh too.
     node_skin: Vec<Option<u32>>,
@@ -72,6 +75,8 @@ impl<'a> RigBuilder<'a> {
             doc,
             buffers,
             node_visit: vec![NO_VISIT; nodes.len()],
+            placements: Vec::new(),
+            node_placements: vec![None; nodes.len()],
             nodes,
             visits: Vec::new(),
             primitives: Vec::new(),
@@ -109,12 +114,29 @@ impl<'a> RigBuilder<'a> {
         v
     }
 
-    /// Places `primitive` at `visit`; returns the index of its first vertex.
-    pub fn instance(&mut self, visit: u32, node: usize, primitive: u32) -> u32 {
+    /// The indices of `node`'s instancing matrices (`read` once, at the node's first visit).
+    pub fn placements(
+        &mut self,
+        node: usize,
+        read: impl FnOnce() -> Result<Vec<DMat4>, SceneError>,
+    ) -> Result<std::ops::Range<u32>, SceneError> {
+        if let Some(range) = &self.node_placements[node] {
+            return Ok(range.clone());
+        }
+        let start = self.placements.len() as u32;
+        self.placements.extend(read()?);
+        let range = start..self.placements.len() as u32;
+        self.node_placements[node] = Some(range.clone());
+        Ok(range)
+    }
+
+    /// Places `primitive` at `visit` (in the instancing `placement` of the node's space, if
+    /// any); returns the index of its first vertex.
+    pub fn instance(&mut self, visit: u32, node: usize, primitive: u32, placement: Option<u32>) -> u32 {
         let first = self.vertex_count;
         let skinned = self.primitives[primitive as usize].influences.is_some();
         let skin = if skinned { self.node_skin[node] } else { None };
-        self.instances.push(Instance { visit, node: node as u32, primitive, skin, first_vertex: first });
+        self.instances.push(Instance { visit, node: node as u32, primitive, skin, placement, first_vertex: first });
         self.vertex_count += self.primitives[primitive as usize].positions.len();
         first as u32
     }
@@ -257,6 +279,7 @@ impl<'a> RigBuilder<'a> {
             visits: self.visits,
             primitives: self.primitives,
             instances: self.instances,
+            placements: self.placements,
             joint_count: offset,
             skins,
             clips,

@@ -160,6 +160,9 @@ struct Instance {
     node: u32,
     primitive: u32,
     skin: Option<u32>,
+    /// An `EXT_mesh_gpu_instancing` instance's placement in the node's space (its index in
+    /// [`Rig::placements`]).
+    placement: Option<u32>,
     first_vertex: usize,
 }
 
@@ -180,6 +183,8 @@ pub struct Rig {
     visits: Vec<Visit>,
     primitives: Vec<Primitive>,
     instances: Vec<Instance>,
+    /// The instancing extension's matrices (T · R · S, applied before the node's transform).
+    placements: Vec<DMat4>,
     skins: Vec<Skin>,
     clips: Vec<Clip>,
     /// Per node, its morph weights in [`Rig::rest_weights`]: `weight_start[n]..weight_start[n + 1]`.
@@ -408,6 +413,7 @@ impl Rig {
                 }
                 _ => {
                     let m = s.world[inst.visit as usize];
+                    let m = inst.placement.map_or(m, |p| m * self.placements[p as usize]);
                     for (k, o) in local.zip(dst.iter_mut()) {
                         *o = m.transform_point3(morph(k)).as_vec3();
                     }

@@ -205,3 +205,97 @@ fn quantized_positions_load_under_khr_mesh_quantization() {
         assert!(refused.to_string().contains("KHR_mesh_quantization"), "{refused}");
     }
 }
+
+#[test]
+fn ext_mesh_gpu_instancing_expands_each_instance_in_order() {
+    use glam::{DMat4, DQuat, DVec3};
+    let corners = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let t = [[0.0f32, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 7.0]];
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    // Identity, 90° about z, 90° about x.
+    let r = [[0.0f32, 0.0, 0.0, 1.0], [0.0, 0.0, half, half], [half, 0.0, 0.0, half]];
+    let s = [[1.0f32, 1.0, 1.0], [2.0, 2.0, 2.0], [1.0, 1.0, 3.0]];
+    // Node 0 (root, +10x, ×2) and node 1 (root, +100y) both have node 2 as a child: node 2's
+    // three instances appear under each, node 0's visit first.
+    let build = |required: bool, edit: &dyn Fn(&mut Doc, usize)| {
+        let mut d = Doc::new();
+        let p = d.positions(&corners);
+        let m = d.mesh(p, None, 4);
+        let ta = d.floats(t.as_flattened(), "VEC3", 3);
+        let ra = d.floats(r.as_flattened(), "VEC4", 4);
+        let sa = d.floats(s.as_flattened(), "VEC3", 3);
+        let inst = d.node(json!({"mesh": m, "extensions": {"EXT_mesh_gpu_instancing":
+            {"attributes": {"TRANSLATION": ta, "ROTATION": ra, "SCALE": sa}}}}));
+        let a = d.node(json!({"children": [inst], "translation": [10.0, 0.0, 0.0], "scale": [2.0, 2.0, 2.0]}));
+        let b = d.node(json!({"children": [inst], "translation": [0.0, 100.0, 0.0]}));
+        d.root(a);
+        d.root(b);
+        d.json["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+        if required {
+            d.json["extensionsRequired"] = json!(["EXT_mesh_gpu_instancing"]);
+        }
+        edit(&mut d, inst);
+        d.glb()
+    };
+    for required in [true, false] {
+        let (mesh, report) = load_slice(&build(required, &|_, _| ()), "instanced.glb", None).unwrap();
+        assert_eq!(report.triangles, 6, "three instances under each of two parents");
+        let parents = [
+            DMat4::from_scale_rotation_translation(DVec3::splat(2.0), DQuat::IDENTITY, DVec3::new(10.0, 0.0, 0.0)),
+            DMat4::from_translation(DVec3::new(0.0, 100.0, 0.0)),
+        ];
+        for (k, parent) in parents.iter().enumerate() {
+            for i in 0..3 {
+                let q = r[i].map(f64::from);
+                let local = DMat4::from_scale_rotation_translation(
+                    DVec3::from(s[i].map(f64::from)),
+                    DQuat::from_xyzw(q[0], q[1], q[2], q[3]).normalize(),
+                    DVec3::from(t[i].map(f64::from)),
+                );
+                let got = mesh.triangle(3 * k + i);
+                for (g, c) in got.iter().zip(corners) {
+                    let e = (*parent * local).transform_point3(DVec3::from(c.map(f64::from)));
+                    assert!(
+                        (g.as_dvec3() - e).abs().max_element() < 1e-5,
+                        "parent {k} instance {i}: {got:?}, expected corner {e:?}"
+                    );
+                }
+            }
+        }
+    }
+    // Malformed instancing: an error naming the extension and the node.
+    let refused =
+        |edit: &dyn Fn(&mut Doc, usize)| load_slice(&build(true, edit), "bad.glb", None).unwrap_err().to_string();
+    let different_counts = refused(&|d, n| {
+        let two = d.floats(&[1.0, 1.0, 1.0, 2.0, 2.0, 2.0], "VEC3", 3);
+        d.json["nodes"][n]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["SCALE"] = json!(two);
+    });
+    assert!(
+        different_counts.contains("EXT_mesh_gpu_instancing") && different_counts.contains("node 0"),
+        "{different_counts}"
+    );
+    let wrong_type = refused(&|d, n| {
+        let bytes = d.accessor(&[0u8; 12], 5121, 3, "VEC4");
+        d.json["nodes"][n]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] = json!(bytes);
+    });
+    assert!(wrong_type.contains("ROTATION"), "{wrong_type}");
+    let zero_rotation = refused(&|d, n| {
+        let zeros = d.floats(&[0.0; 12], "VEC4", 4);
+        d.json["nodes"][n]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] = json!(zeros);
+    });
+    assert!(zero_rotation.contains("zero quaternion"), "{zero_rotation}");
+    let missing = refused(&|d, n| {
+        d.json["nodes"][n]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = json!(99);
+    });
+    assert!(missing.contains("does not exist"), "{missing}");
+    // An instancing bomb (2^30 instances declared over a 12-byte buffer view) is refused by the
+    // budget before anything is read.
+    let bomb = refused(&|d, n| {
+        let view = d.view(&[0u8; 12]);
+        let huge = d
+            .push("accessors", json!({"bufferView": view, "componentType": 5126, "count": 1u64 << 30, "type": "VEC3"}));
+        let attrs = &mut d.json["nodes"][n]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
+        *attrs = json!({"TRANSLATION": huge});
+    });
+    assert!(bomb.contains("--max-triangles") || bomb.contains("--max-load-bytes"), "{bomb}");
+}
