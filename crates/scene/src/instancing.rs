@@ -22,7 +22,8 @@ pub(crate) struct NodeInstancing {
     pub count: usize,
 }
 
-/// The attributes the extension defines, their accessor types, and the component types allowed.
+/// The attributes the extension defines and their accessor types (the component types are checked in
+/// [`NodeInstancing::of`]: float, and for ROTATION also normalized byte or short).
 const ATTRIBUTES: [(&str, Dimensions); 3] =
     [("TRANSLATION", Dimensions::Vec3), ("ROTATION", Dimensions::Vec4), ("SCALE", Dimensions::Vec3)];
 
