@@ -143,6 +143,7 @@ struct Loader<'a> {
 struct SceneWalk<'w, 'r> {
     meshes: &'w [Vec<Option<LocalPrimitive>>],
     visit_below: &'w [bool],
+    instancing: &'w [Option<NodeInstancing>],
     out: &'w mut Mesh,
     path: Vec<usize>,
     rig: &'w mut RigBuilder<'r>,
@@ -190,6 +191,7 @@ impl Loader<'_> {
         let mut walk = SceneWalk {
             meshes: &meshes,
             visit_below: &plan.visit_below,
+            instancing: &plan.instancing,
             out: &mut out,
             path: Vec::new(),
             rig: &mut rig,
@@ -222,7 +224,7 @@ impl Loader<'_> {
     /// Visits `node` under the visit `parent`: its mesh's primitives become instances (and
     /// triangles, in order), then its children that lead to a mesh or a joint.
     fn visit(&self, node: &gltf::Node, parent: Option<u32>, walk: &mut SceneWalk) -> Result<(), SceneError> {
-        let SceneWalk { meshes, visit_below, out, path, rig } = walk;
+        let SceneWalk { meshes, visit_below, instancing, out, path, rig } = walk;
         let idx = node.index();
         if path.contains(&idx) {
             return Err(SceneError::InvalidNode {
@@ -240,14 +242,17 @@ impl Loader<'_> {
         }
         let visit = rig.visit(idx, parent);
         if let Some(mesh) = node.mesh() {
-            // EXT_mesh_gpu_instancing: the primitives once per instance, instance after instance.
-            let placements: Vec<Option<u32>> = match NodeInstancing::of(self.doc, node, &self.name)? {
+            // EXT_mesh_gpu_instancing: the primitives once per instance, instance after instance
+            // (the instances' matrices read at the node's first visit).
+            let (first, count) = match &instancing[idx] {
                 Some(gpu) => {
-                    rig.placements(idx, || gpu.matrices(self.doc, self.buffers, idx, &self.name))?.map(Some).collect()
+                    let r = rig.placements(idx, || gpu.matrices(self.doc, self.buffers, idx, &self.name))?;
+                    (Some(r.start), r.len())
                 }
-                None => vec![None],
+                None => (None, 1),
             };
-            for placement in placements {
+            for k in 0..count as u32 {
+                let placement = first.map(|s| s + k);
                 for prim in meshes[mesh.index()].iter().flatten() {
                     let total = out.indices.len() as u64 + prim.triangles.len() as u64;
                     if total > MAX_TRIANGLES {

@@ -1,7 +1,9 @@
 //! `EXT_mesh_gpu_instancing`: a node's mesh drawn once per instance, each instance placed by its
 //! own translation, rotation and scale (accessors named in the node's extension object) inside
 //! the node's space. The loader expands the instances into triangles (instance after instance,
-//! each with the mesh's primitives in order); the load budget counts them first.
+//! each with the mesh's primitives in order); the load budget parses and counts them first
+//! ([`NodeInstancing::of`], once per node), the walk reads each node's matrices at its first
+//! visit ([`NodeInstancing::matrices`]).
 
 use glam::{DMat4, DQuat, DVec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -13,7 +15,7 @@ use crate::error::SceneError;
 pub(crate) const MESH_GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 /// The instancing of one node: its attributes' accessors and the instance count they share.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct NodeInstancing {
     translation: Option<usize>,
     rotation: Option<usize>,
@@ -27,6 +29,11 @@ pub(crate) struct NodeInstancing {
 const ATTRIBUTES: [(&str, Dimensions); 3] =
     [("TRANSLATION", Dimensions::Vec3), ("ROTATION", Dimensions::Vec4), ("SCALE", Dimensions::Vec3)];
 
+/// The error for node `node`'s malformed instancing.
+fn invalid(name: &str, node: usize, detail: String) -> SceneError {
+    SceneError::InvalidNode { source_name: name.into(), node, detail: format!("{MESH_GPU_INSTANCING}: {detail}") }
+}
+
 impl NodeInstancing {
     /// The instancing of `node`, or `None` when it has none; an error for an extension object
     /// that is malformed (attributes missing or not accessor indices, an accessor that does not
@@ -38,11 +45,7 @@ impl NodeInstancing {
         name: &str,
     ) -> Result<Option<NodeInstancing>, SceneError> {
         let Some(ext) = node.extension_value(MESH_GPU_INSTANCING) else { return Ok(None) };
-        let fail = |detail: String| SceneError::InvalidNode {
-            source_name: name.into(),
-            node: node.index(),
-            detail: format!("{MESH_GPU_INSTANCING}: {detail}"),
-        };
+        let fail = |detail: String| invalid(name, node.index(), detail);
         if node.mesh().is_none() {
             return Err(fail("the node has no mesh to instance".into()));
         }
@@ -110,11 +113,7 @@ impl NodeInstancing {
         node: usize,
         name: &str,
     ) -> Result<Vec<DMat4>, SceneError> {
-        let fail = |detail: String| SceneError::InvalidNode {
-            source_name: name.into(),
-            node,
-            detail: format!("{MESH_GPU_INSTANCING}: {detail}"),
-        };
+        let fail = |detail: String| invalid(name, node, detail);
         let read = |index: Option<usize>, attr: &str| -> Result<Option<Vec<f64>>, SceneError> {
             let Some(index) = index else { return Ok(None) };
             let acc = doc.accessors().nth(index).expect("checked when parsed");

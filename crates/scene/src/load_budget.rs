@@ -72,6 +72,8 @@ pub(crate) struct Plan {
     pub bytes: u64,
     /// Per node: a mesh or a skin joint at it or below it (subtrees without one need no visit).
     pub visit_below: Vec<bool>,
+    /// Per node, its `EXT_mesh_gpu_instancing` (parsed and checked once, here).
+    pub instancing: Vec<Option<crate::instancing::NodeInstancing>>,
 }
 
 /// The flag that raises each limit, named in the errors.
@@ -211,6 +213,7 @@ pub(crate) fn check(
     }
     let node_mesh: Vec<usize> = doc.nodes().map(|n| n.mesh().map_or(usize::MAX, |m| m.index())).collect();
     let (mut triangles, mut vertices, mut worst) = (0u128, 0u128, (0usize, 0u128));
+    let mut instancing = vec![None; node_mesh.len()];
     for node in doc.nodes() {
         let Some(mesh) = node.mesh() else { continue };
         // EXT_mesh_gpu_instancing: the mesh once per instance, wherever the node is reached.
@@ -220,6 +223,7 @@ pub(crate) fn check(
                 c.add(at, gpu.count as u64, gpu.bytes_per_instance())?;
             }
             inst[node.index()] = inst[node.index()].saturating_mul(gpu.count as u128);
+            instancing[node.index()] = Some(gpu);
         }
         let t = inst[node.index()].saturating_mul(mesh_tris[mesh.index()] as u128);
         triangles = triangles.saturating_add(t);
@@ -269,7 +273,7 @@ pub(crate) fn check(
     for &n in order.iter().rev() {
         visit_below[n] = visit_below[n] || children[n].iter().any(|&c| visit_below[c]);
     }
-    Ok(Plan { triangles: triangles as u64, vertices: vertices as u64, bytes: c.bytes as u64, visit_below })
+    Ok(Plan { triangles: triangles as u64, vertices: vertices as u64, bytes: c.bytes as u64, visit_below, instancing })
 }
 
 /// Bytes per element once decoded ([`crate::accessor::read_components`] yields f64 components).
