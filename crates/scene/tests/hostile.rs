@@ -113,12 +113,21 @@ fn rich_doc() -> Doc {
     }
     let rot = d.floats(&rot, "VEC4", 4);
     let w = d.floats(&[0.0, 0.5, 1.0], "SCALAR", 1);
+    // EXT_mesh_gpu_instancing: two instances, rotations as normalized shorts.
+    let inst_t = d.floats(&[0., 0., 0., 0., 0., 4.], "VEC3", 3);
+    let r16: Vec<u8> = [0i16, 0, 0, 32767, 0, 23170, 0, 23170].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let inst_r = d.accessor(&r16, 5122, 2, "VEC4");
+    d.json["accessors"][inst_r]["normalized"] = json!(true);
+    let inst_s = d.floats(&[1., 1., 1., 2., 1., 0.5], "VEC3", 3);
     d.json["nodes"] = json!([
-        {"children": [1, 2, 3], "translation": [1.0, 2.0, 3.0]},
+        {"children": [1, 2, 3, 4], "translation": [1.0, 2.0, 3.0]},
         {"mesh": 0, "skin": 0},
         {"translation": [0.0, 1.0, 0.0]},
-        {"mesh": 1, "scale": [2.0, 2.0, 2.0]}
+        {"mesh": 1, "scale": [2.0, 2.0, 2.0]},
+        {"mesh": 1, "translation": [0.0, 0.0, -3.0], "extensions": {"EXT_mesh_gpu_instancing":
+            {"attributes": {"TRANSLATION": inst_t, "ROTATION": inst_r, "SCALE": inst_s}}}}
     ]);
+    d.json["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
     d.json["scenes"] = json!([{"nodes": [0]}]);
     d.json["skins"] = json!([{"joints": [0, 2], "inverseBindMatrices": ibm}]);
     d.json["animations"] = json!([{
@@ -146,7 +155,7 @@ fn rich_with(f: impl FnOnce(&mut Value)) -> Vec<u8> {
 fn corpus() -> Vec<Case> {
     let err = |name, bytes, f: fn(&SceneError) -> bool| Case { name, bytes, expect: Expect::Error(f) };
     let mut c = vec![
-        Case { name: "rich valid file", bytes: finish(rich_doc()), expect: Expect::Triangles(3) },
+        Case { name: "rich valid file", bytes: finish(rich_doc()), expect: Expect::Triangles(5) },
         err("graph bomb, deep (2^28 instances)", graph_bomb(28, 2, true), over_budget),
         err("graph bomb, wide (16 children per level)", graph_bomb(9, 16, true), over_budget),
         err("graph bomb of empty nodes (2^40 visits)", graph_bomb(40, 2, false), over_budget),
@@ -317,8 +326,17 @@ fn corpus() -> Vec<Case> {
     c.push(Case {
         name: "requires a material extension only",
         bytes: rich_with(|j| j["extensionsRequired"] = json!(["KHR_materials_unlit"])),
-        expect: Expect::Triangles(3),
+        expect: Expect::Triangles(5),
     });
+    c.push(err(
+        "2^30 instances of a mesh (a sparse accessor with no data)",
+        rich_with(|j| {
+            let a = j["accessors"].as_array().unwrap().len();
+            j["accessors"].as_array_mut().unwrap().push(sparse_accessor(1 << 30, "VEC3"));
+            j["nodes"][4]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = json!({"TRANSLATION": a});
+        }),
+        over_budget,
+    ));
     c.push(err("morph weights count mismatch", rich_with(|j| j["meshes"][0]["weights"] = json!([0.5, 0.5])), |e| {
         matches!(e, SceneError::InvalidMorphTargets { .. })
     }));
@@ -528,7 +546,7 @@ fn structured_json_mutation_never_panics_and_stays_bounded() {
     for k in 0..2500 {
         let mut j = json.clone();
         for _ in 0..1 + rng.below(3) {
-            mutate(&mut j, &mut rng, 4);
+            mutate(&mut j, &mut rng, 5);
         }
         let bytes = glb(&j, &bin);
         let (r, took) = measure(&bytes, &limits);
