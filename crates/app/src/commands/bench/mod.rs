@@ -44,6 +44,8 @@ pub struct Row {
     pub memory_bytes: u64,
     pub bytes_per_triangle: f64,
     pub rays: RaySet,
+    /// How many rays the set has.
+    pub ray_count: u64,
     /// Share of the set's rays that hit something.
     pub hit_share: f64,
     pub mrays_s: f64,
@@ -341,6 +343,7 @@ fn bench_scene(
                     memory_bytes: m.memory,
                     bytes_per_triangle: m.memory as f64 / sc.tris.len() as f64,
                     rays: batch.set,
+                    ray_count: batch.rays.len() as u64,
                     hit_share: hit_share(&reference[i]),
                     mrays_s,
                     gpu_mrays_s,
