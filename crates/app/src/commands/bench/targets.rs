@@ -204,3 +204,51 @@ pub fn print(targets: &[Target]) {
     let agreeing = targets.iter().filter(|t| t.target.contains("disagreeing") && t.met).count();
     println!("  + {agreeing} structure × scene × ray set rows whose hits all agree with the flat grid's");
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(structure: &str, family: &'static str, mrays_s: f64, mismatches: u64) -> Row {
+        Row {
+            scene: "s".into(),
+            kind: "scanned".into(),
+            triangles: 10,
+            structure: structure.into(),
+            family,
+            build_ms: 1.0,
+            memory_bytes: 100,
+            bytes_per_triangle: 10.0,
+            rays: RaySet::Random,
+            ray_count: 10_000,
+            hit_share: 0.5,
+            mrays_s,
+            gpu_mrays_s: None,
+            parallel_build: true,
+            shared_triangle_test: false,
+            mismatches,
+            flat_wrong: 0,
+            blind_near: 0,
+        }
+    }
+
+    /// The fastest BVH is the yardstick unless it answers more than 0.1% of the rays wrongly:
+    /// then the next one is, and the wrong one gets a reported row.
+    #[test]
+    fn a_mostly_wrong_peer_is_not_the_best_bvh() {
+        let ratio = |rows: &[Row]| {
+            let t = evaluate(rows, &[], &[]);
+            let best = t.iter().find(|t| t.target == "best grid / best BVH Mrays/s, random").unwrap().measured;
+            (best, t.iter().filter(|t| t.target.contains("left out of the best BVH")).count())
+        };
+        let grid = row("flat", "grid", 2.0, 0);
+        // 10 wrong rays of 10,000 (0.1%): still counted.
+        assert_eq!(ratio(&[grid.clone(), row("fast", "peer", 8.0, 10), row("slow", "peer", 4.0, 0)]), (0.25, 0));
+        // 11 wrong rays: left out, the next peer is the yardstick.
+        assert_eq!(ratio(&[grid.clone(), row("fast", "peer", 8.0, 11), row("slow", "peer", 4.0, 0)]), (0.5, 1));
+        // Rays where the flat grid is the wrong one do not count against the peer.
+        let mut fast = row("fast", "peer", 8.0, 11);
+        fast.flat_wrong = 5;
+        assert_eq!(ratio(&[grid, fast, row("slow", "peer", 4.0, 0)]), (0.25, 0));
+    }
+}
