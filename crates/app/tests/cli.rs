@@ -494,6 +494,14 @@ fn gpu_trace_and_render() {
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
     ok(&["render", s(&scene), "--size", "64x48", "--camera", "0,0.5,6,0,0,0,40", "-o", s(&png)]);
+    // The GPU frame's passes timed apart: the shaded view traces shadow rays, a heatmap none.
+    for (view, shadows) in [("shaded", true), ("heatmap-tests", false)] {
+        let out = ok(&["render", s(&scene), "--size", "64x48", "--view", view, "--json", "-o", s(&png)]);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["backend"], "gpu", "{out}");
+        assert!(v["primary_ms"].as_f64().unwrap() > 0.0, "{out}");
+        assert_eq!(v["shadow_ms"].as_f64().is_some_and(|ms| ms > 0.0), shadows, "{out}");
+    }
     fails(&["render", s(&scene), "--view", "xray", "-o", s(&png)], "unknown view");
     fails(&["render", s(&scene), "--size", "0x10", "-o", s(&png)], "width and height");
     // Larger than one dispatch and one storage binding: rendered in tiles.

@@ -185,7 +185,7 @@ impl GridBuilder {
                 let mut enc = Self::encoder(ctx, "grid build: occupancy");
                 let occupancy = self.occupancy(ctx, &mut enc, &fine, a)?;
                 ctx.queue.submit([enc.finish()]);
-                wait(ctx)?;
+                ctx.wait_idle("the grid build")?;
                 fine.times.record_since("occupancy", start);
                 (a, Vec::new(), occupancy)
             }
@@ -404,7 +404,7 @@ impl GridBuilder {
             &[&scene.triangles, &cursor, &refs],
         )?;
         ctx.queue.submit([enc.finish()]);
-        wait(ctx)?;
+        ctx.wait_idle("the grid build")?;
         times.record_since("scatter", start);
         let start = web_time::Instant::now();
         // Each cell's references sorted, and the occupied cells' starts (the table of M + 1
@@ -423,7 +423,7 @@ impl GridBuilder {
             &[&cell_start, &occupied, &ranks, &ref_start],
         )?;
         ctx.queue.submit([enc.finish()]);
-        wait(ctx)?;
+        ctx.wait_idle("the grid build")?;
         times.record_since("sort cells + compact", start);
         ctx.check_device()?;
         let structure = GpuStructure {
@@ -527,19 +527,4 @@ impl GridBuilder {
     pub fn read_back(&self, ctx: &GpuContext, grid: &GpuGrid) -> Result<AnyGrid, GpuError> {
         pollster::block_on(self.read_back_async(ctx, grid))
     }
-}
-
-/// Waits until the queue is idle (natively; in a browser the passes just queue, and the phase
-/// times measure their submission).
-fn wait(ctx: &GpuContext) -> Result<(), GpuError> {
-    #[cfg(target_arch = "wasm32")]
-    {
-        let _ = ctx;
-        Ok(())
-    }
-    #[cfg(not(target_arch = "wasm32"))]
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map(|_| ())
-        .map_err(|e| GpuError::Device(format!("waiting for the grid build: {e}")))
 }

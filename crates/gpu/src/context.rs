@@ -106,6 +106,21 @@ pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
 }
 
 impl GpuContext {
+    /// Waits until the queue is idle: natively; in a browser the passes just queue (a time
+    /// taken after it measures their submission).
+    pub fn wait_idle(&self, what: &str) -> Result<(), GpuError> {
+        #[cfg(target_arch = "wasm32")]
+        {
+            let _ = what;
+            Ok(())
+        }
+        #[cfg(not(target_arch = "wasm32"))]
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Device(format!("waiting for {what}: {e}")))
+    }
+
     /// Creates a headless device on the adapter chosen from the environment (module doc).
     pub async fn new_headless() -> Result<GpuContext, GpuError> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle().with_env());

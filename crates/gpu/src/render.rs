@@ -77,6 +77,26 @@ pub struct Frame {
     pub rgba: Vec<u8>,
     pub hits: Vec<Hit>,
     pub stats: Vec<RayStats>,
+    /// Wall-clock time of each pass, summed over the tiles ([`Renderer::render`] waits for the
+    /// device after each).
+    pub times: PassTimes,
+}
+
+/// The stages of a frame [`Renderer::render`] times apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    /// Camera rays and their trace.
+    Primary,
+    /// Shadow rays from the primary hits and their trace (occlusion queries; shaded view).
+    Shadow,
+}
+
+/// Milliseconds per [`Pass`] (the rest of a frame, shading and the read-back, is in neither).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassTimes {
+    pub primary_ms: f64,
+    /// `None` when the view traces no shadow rays.
+    pub shadow_ms: Option<f64>,
 }
 
 /// The light the shaded view uses: above and to the side of the scene.
@@ -284,6 +304,22 @@ impl Renderer {
         t: &FrameTarget,
         pixels: std::ops::Range<u32>,
     ) -> Result<(), GpuError> {
+        self.encode_tile_with(ctx, enc, src, o, t, pixels, &mut |_, _| Ok(()))
+    }
+
+    /// [`Renderer::encode_tile`], calling `after(enc, pass)` once each [`Pass`] is recorded
+    /// (a caller may submit `enc` there and go on in a fresh encoder).
+    #[allow(clippy::too_many_arguments)]
+    fn encode_tile_with(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        src: &FrameSource,
+        o: &RenderOptions,
+        t: &FrameTarget,
+        pixels: std::ops::Range<u32>,
+        after: &mut dyn FnMut(&mut wgpu::CommandEncoder, Pass) -> Result<(), GpuError>,
+    ) -> Result<(), GpuError> {
         let FrameSource { scene, structure: s, bounds } = *src;
         let (first, count) = (pixels.start, pixels.end.saturating_sub(pixels.start));
         if (o.width, o.height) != (t.width, t.height) {
@@ -349,6 +385,7 @@ impl Renderer {
             self.tracer.encode(ctx, enc, &job)
         };
         trace(enc, &t.trace_params, &t.rays, &t.hits, &t.stats)?;
+        after(enc, Pass::Primary)?;
         if o.view == View::Shaded {
             let shadow_bg = bind(
                 &self.shadow,
@@ -357,6 +394,7 @@ impl Renderer {
             );
             run(enc, &self.shadow, &shadow_bg, "shadow rays");
             trace(enc, &t.shadow_params, &t.shadow_rays, &t.shadow_hits, &t.shadow_stats)?;
+            after(enc, Pass::Shadow)?;
         }
         let shade_bg = bind(
             &self.shade,
@@ -393,7 +431,9 @@ impl Renderer {
         Ok(())
     }
 
-    /// Renders one frame tile by tile, reading each tile back as it finishes.
+    /// Renders one frame tile by tile, reading each tile back as it finishes; each tile's
+    /// passes are submitted and waited for one by one, so that the frame's [`PassTimes`] are
+    /// the passes' own.
     pub fn render(&self, ctx: &GpuContext, src: &FrameSource, o: &RenderOptions) -> Result<Frame, GpuError> {
         let t = FrameTarget::new(ctx, o.width, o.height, false)?;
         let n = t.pixel_count();
@@ -416,12 +456,29 @@ impl Renderer {
             rgba: Vec::with_capacity(n as usize * 4),
             hits: Vec::with_capacity(n as usize),
             stats: Vec::with_capacity(n as usize),
+            times: PassTimes::default(),
         };
         let mut first = 0u64;
         while first < n {
             let count = cap.min(n - first);
-            let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render tile") });
-            self.encode_tile(ctx, &mut enc, src, o, &t, first as u32..(first + count) as u32)?;
+            let new_encoder =
+                || dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render tile") });
+            let mut enc = new_encoder();
+            let mut since = web_time::Instant::now();
+            let times = &mut frame.times;
+            let mut after = |enc: &mut wgpu::CommandEncoder, pass: Pass| {
+                ctx.queue.submit([std::mem::replace(enc, new_encoder()).finish()]);
+                ctx.wait_idle("a render pass")?;
+                let ms = since.elapsed().as_secs_f64() * 1e3;
+                match pass {
+                    Pass::Primary => times.primary_ms += ms,
+                    Pass::Shadow => *times.shadow_ms.get_or_insert(0.0) += ms,
+                }
+                since = web_time::Instant::now();
+                Ok(())
+            };
+            let tile = first as u32..(first + count) as u32;
+            self.encode_tile_with(ctx, &mut enc, src, o, &t, tile, &mut after)?;
             enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, count * PIXEL_BYTES);
             enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, count * HIT_BYTES);
             enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, count * STATS_BYTES);

@@ -397,10 +397,7 @@ pub async fn read_back_async<T: bytemuck::Pod>(
             }
         }
     });
-    #[cfg(not(target_arch = "wasm32"))]
-    ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| err(&e))?;
-    #[cfg(target_arch = "wasm32")]
-    let _ = ctx;
+    ctx.wait_idle(what).map_err(|e| err(&e))?;
     MapFuture(state).await.map_err(|e| err(&e))?;
     copy_mapped(buffer, slice, what)
 }

@@ -20,7 +20,7 @@ struct Rendered {
     rgba: Vec<u8>,
     hits: Vec<Hit>,
     primary_ms: f64,
-    /// The CPU's shadow pass (the GPU frame's time is all in `primary_ms`).
+    /// The shadow pass (shaded view): shadow rays from the primary hits and their trace.
     shadow_ms: Option<f64>,
     cells_per_ray: f64,
     tests_per_ray: f64,
@@ -74,17 +74,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             let gs = gpu.upload(&grid)?;
             // Warm-up on a small frame: pipeline compilation stays out of the timing.
             gpu.render(&gs, &RenderOptions { width: 64, height: 48, ..opts })?;
-            let start = Instant::now();
             let frame = gpu.render(&gs, &opts)?;
-            let ms = start.elapsed().as_secs_f64() * 1e3;
             let n = frame.stats.len().max(1) as f64;
             let rendered = Rendered {
                 cells_per_ray: frame.stats.iter().map(|s| s.cells as f64).sum::<f64>() / n,
                 tests_per_ray: frame.stats.iter().map(|s| s.tests as f64).sum::<f64>() / n,
                 rgba: frame.rgba,
                 hits: frame.hits,
-                primary_ms: ms,
-                shadow_ms: None,
+                primary_ms: frame.times.primary_ms,
+                shadow_ms: frame.times.shadow_ms,
                 // On the GPU every 8×8 tile of each pass is one packet workgroup (an incoherent
                 // one traces its rays singly; the kernel does not count them apart).
                 packets: PacketStats { packets: gpu_packets(&grid, &opts), single_ray_packets: 0 },
@@ -148,24 +146,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         ),
     };
     let mrays = |ms: f64| rays as f64 / ms / 1e3;
-    match frame.shadow_ms {
-        Some(s) => println!(
-            "primary {:.1} ms ({:.2} Mrays/s), shadow {s:.1} ms, {:.2} cells and {:.2} tests per primary ray{packets}; build {:.1} ms",
-            frame.primary_ms,
-            mrays(frame.primary_ms),
-            frame.cells_per_ray,
-            frame.tests_per_ray,
-            b.times.total()
-        ),
-        None => println!(
-            "frame: {:.1} ms ({:.2} Mrays/s primary), {:.2} cells and {:.2} tests per primary ray{packets}; build {:.1} ms",
-            frame.primary_ms,
-            mrays(frame.primary_ms),
-            frame.cells_per_ray,
-            frame.tests_per_ray,
-            b.times.total()
-        ),
-    }
+    let shadow = frame.shadow_ms.map(|s| format!(", shadow {s:.1} ms")).unwrap_or_default();
+    println!(
+        "primary {:.1} ms ({:.2} Mrays/s){shadow}, {:.2} cells and {:.2} tests per primary ray{packets}; build {:.1} ms",
+        frame.primary_ms,
+        mrays(frame.primary_ms),
+        frame.cells_per_ray,
+        frame.tests_per_ray,
+        b.times.total()
+    );
     if args.view.is_heatmap() {
         println!(
             "colour scale: 0 black, {:.0} blue, {:.0} cyan, {:.0} green, {:.0} yellow, {:.0} red, >= {:.0} white",
