@@ -7,7 +7,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use gridrt_gpu::{GpuSession, RenderOptions};
+use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_gpu::{FrameSource, RenderOptions, Renderer};
 use serde::Serialize;
 
 use super::build_grid;
@@ -84,12 +85,20 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     for dir in [&args.frames_dir, &args.out].into_iter().flatten() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    if let Some(ctx) = &ctx {
-        // Pipelines compile on the first frame: warm up outside the timing.
-        let (grid, _) = build_grid(&player.tris, &cfg)?;
-        let gpu = GpuSession::new(ctx, &player.tris, bounds)?;
-        gpu.render(&gpu.upload(&grid)?, &RenderOptions { width: 64, height: 48, ..opts })?;
-    }
+    // One renderer for every frame (its pipelines compile once, on a warm-up frame outside the
+    // timing); each frame uploads its posed triangles and its grid.
+    let renderer = match &ctx {
+        Some(ctx) => {
+            let renderer = Renderer::new(ctx)?;
+            let (grid, _) = build_grid(&player.tris, &cfg)?;
+            let scene = GpuScene::new(ctx, &player.tris)?;
+            let structure = GpuStructure::new(ctx, &grid)?;
+            let src = FrameSource { scene: &scene, structure: &structure, bounds: &bounds };
+            renderer.render(ctx, &src, &RenderOptions { width: 64, height: 48, ..opts })?;
+            Some(renderer)
+        }
+        None => None,
+    };
 
     let pb = progress(frames as u64, "frames");
     let mut rows = Vec::with_capacity(frames as usize);
@@ -107,8 +116,20 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         let tris = &player.tris;
         // Hits, shadowed rays, the end of tracing, and the image when it is wanted (the CPU
         // shades after the timing).
-        let (primary_hits, shadowed, traced, rgba) = match &ctx {
-            None => {
+        let (primary_hits, shadowed, traced, rgba) = match (&ctx, &renderer) {
+            (Some(ctx), Some(renderer)) => {
+                let scene = GpuScene::new(ctx, tris)?;
+                let structure = GpuStructure::new(ctx, &grid)?;
+                let frame = renderer.render(
+                    ctx,
+                    &FrameSource { scene: &scene, structure: &structure, bounds: &bounds },
+                    &opts,
+                )?;
+                let traced = Instant::now();
+                let hits = frame.hits.iter().filter(|h| h.is_hit()).count() as u64;
+                (hits, None, traced, Some(frame.rgba))
+            }
+            _ => {
                 let trace = |rays, o| crate::lab::frame::trace_frame(&grid, tris, rays, width as usize, o, packets);
                 let (hits, st, _) = trace(primary, trace_opts);
                 crate::lab::frame::shadow_rays_from_hits(shade, primary, &hits, &mut shadow);
@@ -120,13 +141,6 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
                     .as_ref()
                     .map(|_| crate::lab::frame::shade_pixels(shade, tris, primary, &hits, None, &shadow_hits));
                 (st.hits, Some(sst.hits), traced, rgba)
-            }
-            Some(ctx) => {
-                let gpu = GpuSession::new(ctx, tris, bounds)?;
-                let frame = gpu.render(&gpu.upload(&grid)?, &opts)?;
-                let traced = Instant::now();
-                let hits = frame.hits.iter().filter(|h| h.is_hit()).count() as u64;
-                (hits, None, traced, Some(frame.rgba))
             }
         };
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
