@@ -169,7 +169,9 @@ fn animated_scene_info_pose_trace_animate_and_bench() {
     ]);
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert_eq!(v["frames"].as_array().unwrap().len(), 3);
-    for key in ["time", "pose_ms", "build_ms", "trace_ms", "total_ms", "primary_hits", "shadowed"] {
+    for key in
+        ["time", "pose_ms", "build_ms", "trace_ms", "primary_ms", "shadow_ms", "total_ms", "primary_hits", "shadowed"]
+    {
         assert!(!v["frames"][2][key].is_null(), "animate --json lacks {key}: {json}");
     }
     assert!((v["frames"][1]["time"].as_f64().unwrap() - 1.0 / 30.0).abs() < 1e-9);
@@ -193,6 +195,15 @@ fn animated_scene_info_pose_trace_animate_and_bench() {
     let (off, without) = counts("off");
     assert_eq!((on, off), (serde_json::json!(true), serde_json::json!(false)));
     assert_eq!(with, without, "animate: packets change the hits");
+    if !skip_gpu() {
+        // The GPU renders every frame with one renderer: the same primary hits as the CPU.
+        let args = ["animate", s(&scene), "--frames", "2", "--size", "40x30", "--grid", "flat", "--backend", "gpu"];
+        let v: serde_json::Value = serde_json::from_str(&ok(&[&args[..], &["--json"]].concat())).unwrap();
+        let gpu: Vec<u64> =
+            v["frames"].as_array().unwrap().iter().map(|f| f["primary_hits"].as_u64().unwrap()).collect();
+        assert_eq!(gpu, with.iter().map(|c| c.0).collect::<Vec<_>>(), "animate: the GPU's hits differ");
+        assert!(v["frames"][1]["primary_ms"].as_f64().unwrap() > 0.0, "{v}");
+    }
 
     let bench = tmp("crowd-bench");
     let v: serde_json::Value = serde_json::from_str(&ok(&[

@@ -28,6 +28,10 @@ pub struct FrameRow {
     pub build_ms: f64,
     /// Primary and shadow rays (GPU: upload of the triangles and the grid included).
     pub trace_ms: f64,
+    /// Of `trace_ms`, the primary rays' trace and the shadow rays' (their generation from the
+    /// primary hits included; on the GPU each pass's own time).
+    pub primary_ms: f64,
+    pub shadow_ms: f64,
     pub total_ms: f64,
     pub grid_bytes: u64,
     pub primary_hits: u64,
@@ -116,7 +120,7 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         let tris = &player.tris;
         // Hits, shadowed rays, the end of tracing, and the image when it is wanted (the CPU
         // shades after the timing).
-        let (primary_hits, shadowed, traced, rgba) = match (&ctx, &renderer) {
+        let (primary_hits, shadowed, traced, passes, rgba) = match (&ctx, &renderer) {
             (Some(ctx), Some(renderer)) => {
                 let scene = GpuScene::new(ctx, tris)?;
                 let structure = GpuStructure::new(ctx, &grid)?;
@@ -127,11 +131,13 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
                 )?;
                 let traced = Instant::now();
                 let hits = frame.hits.iter().filter(|h| h.is_hit()).count() as u64;
-                (hits, None, traced, Some(frame.rgba))
+                let passes = (frame.times.primary_ms, frame.times.shadow_ms.unwrap_or(0.0));
+                (hits, None, traced, passes, Some(frame.rgba))
             }
             _ => {
                 let trace = |rays, o| crate::lab::frame::trace_frame(&grid, tris, rays, width as usize, o, packets);
                 let (hits, st, _) = trace(primary, trace_opts);
+                let primary_done = Instant::now();
                 crate::lab::frame::shadow_rays_from_hits(shade, primary, &hits, &mut shadow);
                 // Shadow rays as occlusion queries (any hit).
                 let (shadow_hits, sst, _) = trace(&shadow, trace_opts.occlusion());
@@ -140,7 +146,8 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
                     .frames_dir
                     .as_ref()
                     .map(|_| crate::lab::frame::shade_pixels(shade, tris, primary, &hits, None, &shadow_hits));
-                (st.hits, Some(sst.hits), traced, rgba)
+                let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+                (st.hits, Some(sst.hits), traced, (ms(built, primary_done), ms(primary_done, traced)), rgba)
             }
         };
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
@@ -150,6 +157,8 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
             pose_ms: ms(start, posed),
             build_ms: ms(posed, built),
             trace_ms: ms(built, traced),
+            primary_ms: passes.0,
+            shadow_ms: passes.1,
             total_ms: ms(start, traced),
             grid_bytes: grid.memory_bytes(),
             primary_hits,
@@ -245,6 +254,8 @@ fn timeline_chart(source: &str, grid: &str, rows: &[FrameRow]) -> Chart {
             series("pose", |r| r.pose_ms),
             series("build", |r| r.build_ms),
             series("trace (primary + shadow)", |r| r.trace_ms),
+            series("primary rays", |r| r.primary_ms),
+            series("shadow rays", |r| r.shadow_ms),
             series("total", |r| r.total_ms),
         ],
         markers: vec![],
