@@ -99,6 +99,14 @@ pub struct PassTimes {
     pub shadow_ms: Option<f64>,
 }
 
+/// What one tile of a frame is drawn from and into ([`Renderer::encode_tile`]'s arguments).
+struct Tile<'a> {
+    src: &'a FrameSource<'a>,
+    o: &'a RenderOptions,
+    t: &'a FrameTarget,
+    pixels: std::ops::Range<u32>,
+}
+
 /// The light the shaded view uses: above and to the side of the scene.
 pub fn light_position(bounds: &Aabb) -> glam::Vec3 {
     bounds.center() + glam::Vec3::new(0.35, 1.0, 0.55) * bounds.diagonal()
@@ -304,20 +312,16 @@ impl Renderer {
         t: &FrameTarget,
         pixels: std::ops::Range<u32>,
     ) -> Result<(), GpuError> {
-        self.encode_tile_with(ctx, enc, src, o, t, pixels, &mut |_, _| Ok(()))
+        self.encode_passes(ctx, enc, Tile { src, o, t, pixels }, &mut |_, _| Ok(()))
     }
 
-    /// [`Renderer::encode_tile`], calling `after(enc, pass)` once each [`Pass`] is recorded
-    /// (a caller may submit `enc` there and go on in a fresh encoder).
-    #[allow(clippy::too_many_arguments)]
-    fn encode_tile_with(
+    /// [`Renderer::encode_tile`] of `tile`, calling `after(enc, pass)` once each [`Pass`] is
+    /// recorded (a caller may submit `enc` there and go on in a fresh encoder).
+    fn encode_passes(
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
-        src: &FrameSource,
-        o: &RenderOptions,
-        t: &FrameTarget,
-        pixels: std::ops::Range<u32>,
+        Tile { src, o, t, pixels }: Tile,
         after: &mut dyn FnMut(&mut wgpu::CommandEncoder, Pass) -> Result<(), GpuError>,
     ) -> Result<(), GpuError> {
         let FrameSource { scene, structure: s, bounds } = *src;
@@ -477,8 +481,8 @@ impl Renderer {
                 since = web_time::Instant::now();
                 Ok(())
             };
-            let tile = first as u32..(first + count) as u32;
-            self.encode_tile_with(ctx, &mut enc, src, o, &t, tile, &mut after)?;
+            let tile = Tile { src, o, t: &t, pixels: first as u32..(first + count) as u32 };
+            self.encode_passes(ctx, &mut enc, tile, &mut after)?;
             enc.copy_buffer_to_buffer(&t.pixels, 0, &pixels_read, 0, count * PIXEL_BYTES);
             enc.copy_buffer_to_buffer(&t.hits, 0, &hits_read, 0, count * HIT_BYTES);
             enc.copy_buffer_to_buffer(&t.stats, 0, &stats_read, 0, count * STATS_BYTES);
