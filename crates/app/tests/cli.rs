@@ -227,6 +227,12 @@ fn animated_scene_info_pose_trace_animate_and_bench() {
     for r in rows.iter().filter(|r| r["family"] == "grid" || r["strategy"] == "refit") {
         assert_eq!(r["mismatches"], 0, "{r}");
     }
+    // The trace split into its primary and shadow rays.
+    for r in rows {
+        let ms = |k: &str| r[k].as_f64().unwrap();
+        assert!(ms("primary_ms") > 0.0 && ms("shadow_ms") > 0.0, "{r}");
+        assert!((ms("primary_ms") + ms("shadow_ms") - ms("trace_ms")).abs() <= 1e-6 * ms("trace_ms"), "{r}");
+    }
     assert!(v["targets"][0]["speedup"].as_f64().unwrap() > 0.0);
 }
 

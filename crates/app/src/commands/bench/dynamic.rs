@@ -44,6 +44,9 @@ pub struct DynamicRow {
     pub build_ms: f64,
     /// Primary and shadow rays, all threads.
     pub trace_ms: f64,
+    /// Of `trace_ms`, the primary rays' and the shadow rays' (occlusion queries).
+    pub primary_ms: f64,
+    pub shadow_ms: f64,
     /// build + trace (pose is the same for everyone and reported apart).
     pub total_ms: f64,
     /// Primary rays whose hit disagrees with the flat grid's (see `agree`) and shadow rays
@@ -172,7 +175,19 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<()> {
         return Ok(());
     }
     print_table(
-        &["scene", "triangles", "structure", "strategy", "pose ms", "build ms", "trace ms", "total ms", "mismatches"],
+        &[
+            "scene",
+            "triangles",
+            "structure",
+            "strategy",
+            "pose ms",
+            "build ms",
+            "trace ms",
+            "(primary",
+            "shadow)",
+            "total ms",
+            "mismatches",
+        ],
         &rows
             .iter()
             .map(|r| {
@@ -184,6 +199,8 @@ pub fn run(args: &BenchArgs, cost: &CostModel) -> anyhow::Result<()> {
                     format!("{:.2}", r.pose_ms),
                     format!("{:.2}", r.build_ms),
                     format!("{:.2}", r.trace_ms),
+                    format!("{:.2}", r.primary_ms),
+                    format!("{:.2}", r.shadow_ms),
                     format!("{:.2}", r.total_ms),
                     r.mismatches.to_string(),
                 ]
@@ -254,6 +271,7 @@ fn bench_scene(
         setup_ms: f64,
         build_ms: f64,
         trace_ms: f64,
+        primary_ms: f64,
         mismatches: u64,
         compared_rays: u64,
     }
@@ -320,6 +338,7 @@ fn bench_scene(
             } else {
                 sum.build_ms += build_ms;
                 sum.trace_ms += trace_ms;
+                sum.primary_ms += primary_ms;
             }
             // The first strategy (the flat grid) is the reference of the others.
             match &reference {
@@ -349,7 +368,14 @@ fn bench_scene(
         .map(|(&strategy, t)| {
             let grid = matches!(strategy, Strategy::Grid(_) | Strategy::GridPackets(_));
             let refit = strategy.refit();
-            let Totals { setup_ms: setup, build_ms: build, trace_ms: trace, mismatches: bad, compared_rays } = *t;
+            let Totals {
+                setup_ms: setup,
+                build_ms: build,
+                trace_ms: trace,
+                primary_ms: primary,
+                mismatches: bad,
+                compared_rays,
+            } = *t;
             DynamicRow {
                 scene: name.clone(),
                 triangles: player.tris.len(),
@@ -361,6 +387,8 @@ fn bench_scene(
                 setup_ms: setup,
                 build_ms: build / n,
                 trace_ms: trace / n,
+                primary_ms: primary / n,
+                shadow_ms: (trace - primary) / n,
                 total_ms: (build + trace) / n,
                 mismatches: bad,
                 compared_rays,
