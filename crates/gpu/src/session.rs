@@ -37,6 +37,13 @@ impl<'a> GpuSession<'a> {
         })
     }
 
+    /// Replaces the session's triangles with `tris` (a new pose of the same scene, within the
+    /// same bounds); the trace and render pipelines are kept.
+    pub fn set_triangles(&mut self, tris: &[[Vec3; 3]]) -> Result<(), GpuError> {
+        self.scene = GpuScene::new(self.ctx, tris)?;
+        Ok(())
+    }
+
     /// Uploads a structure built over the session's triangles.
     pub fn upload(&self, grid: &AnyGrid) -> Result<GpuStructure, GpuError> {
         GpuStructure::new(self.ctx, grid)

@@ -7,8 +7,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use gridrt_gpu::upload::{GpuScene, GpuStructure};
-use gridrt_gpu::{FrameSource, RenderOptions, Renderer};
+use gridrt_gpu::{GpuSession, RenderOptions};
 use serde::Serialize;
 
 use super::build_grid;
@@ -89,17 +88,14 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     for dir in [&args.frames_dir, &args.out].into_iter().flatten() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    // One renderer for every frame (its pipelines compile once, on a warm-up frame outside the
+    // One session for every frame (its pipelines compile once, on a warm-up frame outside the
     // timing); each frame uploads its posed triangles and its grid.
-    let renderer = match &ctx {
+    let mut gpu = match &ctx {
         Some(ctx) => {
-            let renderer = Renderer::new(ctx)?;
             let (grid, _) = build_grid(&player.tris, &cfg)?;
-            let scene = GpuScene::new(ctx, &player.tris)?;
-            let structure = GpuStructure::new(ctx, &grid)?;
-            let src = FrameSource { scene: &scene, structure: &structure, bounds: &bounds };
-            renderer.render(ctx, &src, &RenderOptions { width: 64, height: 48, ..opts })?;
-            Some(renderer)
+            let gpu = GpuSession::new(ctx, &player.tris, bounds)?;
+            gpu.render(&gpu.upload(&grid)?, &RenderOptions { width: 64, height: 48, ..opts })?;
+            Some(gpu)
         }
         None => None,
     };
@@ -120,21 +116,17 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         let tris = &player.tris;
         // Hits, shadowed rays, the end of tracing, and the image when it is wanted (the CPU
         // shades after the timing).
-        let (primary_hits, shadowed, traced, passes, rgba) = match (&ctx, &renderer) {
-            (Some(ctx), Some(renderer)) => {
-                let scene = GpuScene::new(ctx, tris)?;
-                let structure = GpuStructure::new(ctx, &grid)?;
-                let frame = renderer.render(
-                    ctx,
-                    &FrameSource { scene: &scene, structure: &structure, bounds: &bounds },
-                    &opts,
-                )?;
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        let (primary_hits, shadowed, traced, passes, rgba) = match &mut gpu {
+            Some(gpu) => {
+                gpu.set_triangles(tris)?;
+                let frame = gpu.render(&gpu.upload(&grid)?, &opts)?;
                 let traced = Instant::now();
                 let hits = frame.hits.iter().filter(|h| h.is_hit()).count() as u64;
                 let passes = (frame.times.primary_ms, frame.times.shadow_ms.unwrap_or(0.0));
                 (hits, None, traced, passes, Some(frame.rgba))
             }
-            _ => {
+            None => {
                 let trace = |rays, o| crate::lab::frame::trace_frame(&grid, tris, rays, width as usize, o, packets);
                 let (hits, st, _) = trace(primary, trace_opts);
                 let primary_done = Instant::now();
@@ -146,11 +138,9 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
                     .frames_dir
                     .as_ref()
                     .map(|_| crate::lab::frame::shade_pixels(shade, tris, primary, &hits, None, &shadow_hits));
-                let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
                 (st.hits, Some(sst.hits), traced, (ms(built, primary_done), ms(primary_done, traced)), rgba)
             }
         };
-        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         rows.push(FrameRow {
             frame: k,
             time,

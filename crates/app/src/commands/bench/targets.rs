@@ -31,11 +31,11 @@ fn peer<'a>(rows: &'a [Row], scene: &str, prefix: &str) -> Vec<&'a Row> {
 pub const MAX_WRONG_SHARE: f64 = 1e-3;
 
 impl Row {
-    /// Whether more than [`MAX_WRONG_SHARE`] of the set's rays disagree with the exact hits
-    /// (the flat grid's, checked against brute force: a ray where the grid is the wrong one
-    /// does not count against the subject).
-    fn mostly_wrong(&self) -> bool {
-        (self.mismatches - self.flat_wrong) as f64 > MAX_WRONG_SHARE * self.ray_count as f64
+    /// The share of the set's rays whose hits disagree with the exact ones (the flat grid's,
+    /// checked against brute force: a ray where the grid is the wrong one does not count
+    /// against the subject).
+    fn wrong_share(&self) -> f64 {
+        (self.mismatches - self.flat_wrong) as f64 / self.ray_count.max(1) as f64
     }
 }
 
@@ -105,10 +105,11 @@ pub fn evaluate(rows: &[Row], auto: &[AutoPoint], scale: &[ScalePoint]) -> Vec<T
             // A peer that answers many rays wrongly is no yardstick: it is left out of the best
             // BVH (and reported) when more than `MAX_WRONG_SHARE` of the set disagrees with the
             // exact hits (a handful of rays, ties and blind-distance hits, does not count).
-            let (peers, wrong): (Vec<&Row>, Vec<&Row>) = peers.into_iter().partition(|r| !r.mostly_wrong());
+            let (peers, wrong): (Vec<&Row>, Vec<&Row>) =
+                peers.into_iter().partition(|r| r.wrong_share() <= MAX_WRONG_SHARE);
             for r in wrong {
                 let target = format!("{} left out of the best BVH: share of rays wrong, {}", r.structure, set.name());
-                push(&target, scene, r.mismatches as f64 / r.ray_count as f64, "(reported)", true);
+                push(&target, scene, r.wrong_share(), "(reported)", true);
             }
             let Some(g) = max_by(&grids, |r| r.mrays_s) else { continue };
             if let Some(p) = max_by(&peers, |r| r.mrays_s) {
