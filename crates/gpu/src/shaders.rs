@@ -48,6 +48,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
     ("shared/build.wgsl", include_str!("../../../shaders/shared/build.wgsl")),
     ("shared/build_triangles.wgsl", include_str!("../../../shaders/shared/build_triangles.wgsl")),
+    ("shared/soft_f64.wgsl", include_str!("../../../shaders/shared/soft_f64.wgsl")),
 ];
 
 /// Error composing a shader: an unknown file or include.

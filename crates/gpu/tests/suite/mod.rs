@@ -5,4 +5,5 @@ pub mod layout;
 pub mod naga_validate;
 pub mod packets;
 pub mod render;
+pub mod soft_f64;
 pub mod trace;
