@@ -315,7 +315,7 @@ pub struct BuildArgs {
     pub scene: SceneArg,
     #[command(flatten)]
     pub grid: GridArgs,
-    /// Where the grid is built: cpu, or gpu (flat and macrocell grids with box insertion, through
+    /// Where the grid is built: cpu, or gpu (flat and macrocell grids, box or exact insertion, through
     /// WGSL kernels; bit-identical to the CPU build: compare `cells_digest`).
     #[arg(long, value_enum, default_value = "cpu")]
     pub backend: Device,

@@ -817,7 +817,8 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
 }
 
 /// `gridrt build --backend gpu`: the same cells, references and digest as the CPU build for
-/// flat and macrocell grids on a generated scene; kinds the GPU does not build are refused.
+/// flat and macrocell grids, box and exact insertion, on a generated scene; kinds the GPU does
+/// not build are refused.
 #[test]
 fn build_on_the_gpu_matches_the_cpu_digest() {
     if skip_gpu() {
@@ -826,21 +827,35 @@ fn build_on_the_gpu_matches_the_cpu_digest() {
     }
     let scene = tmp("gpu-build-particles.glb");
     ok(&["gen", "particles", "--size", "20000", "-o", s(&scene)]);
-    for grid in ["flat", "macrocell"] {
+    let mut box_refs = None;
+    for (grid, exact) in [("flat", false), ("macrocell", false), ("flat", true), ("macrocell", true)] {
         let run = |backend: &str| -> serde_json::Value {
-            let text = ok(&["build", s(&scene), "--grid", grid, "--backend", backend, "--json"]);
+            let mut args = vec!["build", s(&scene), "--grid", grid, "--backend", backend, "--json"];
+            if exact {
+                args.push("--exact");
+            }
+            let text = ok(&args);
             serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text}"))
         };
         let (cpu, gpu) = (run("cpu"), run("gpu"));
         for key in ["cells", "refs", "cells_digest", "resolution", "memory_bytes"] {
-            assert_eq!(cpu[key], gpu[key], "{grid}: {key}");
+            assert_eq!(cpu[key], gpu[key], "{grid} exact {exact}: {key}");
         }
         assert_eq!(gpu["backend"], "gpu");
         assert!(gpu["adapter"].as_str().is_some_and(|a| !a.is_empty()), "{gpu}");
-        println!("{grid}: {} cells, {} refs, digest {} on both", gpu["cells"], gpu["refs"], gpu["cells_digest"]);
+        // Exact insertion really ran: fewer references than box insertion's at that resolution.
+        match (grid, exact) {
+            ("flat", false) => box_refs = gpu["refs"].as_u64(),
+            ("flat", true) => assert!(gpu["refs"].as_u64() < box_refs, "{gpu}"),
+            _ => {}
+        }
+        println!(
+            "{grid} exact {exact}: {} cells, {} refs, digest {} on both",
+            gpu["cells"], gpu["refs"], gpu["cells_digest"]
+        );
     }
     fails(&["build", s(&scene), "--grid", "multires", "--backend", "gpu"], "use the CPU build");
-    fails(&["build", s(&scene), "--exact", "--backend", "gpu"], "use the CPU build");
+    fails(&["build", s(&scene), "--grid", "proximity", "--exact", "--backend", "gpu"], "use the CPU build");
 }
 
 #[test]

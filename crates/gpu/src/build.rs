@@ -8,7 +8,9 @@
 //! occupancy bits from the occupancy words (`build_occupancy.wgsl`, per candidate A when the
 //! cost model chooses A, as on the CPU).
 //! Insertion is by bounding box with the conservative margin, the same f32 rule as
-//! `gridrt_grid::insert::box_cell_range`; the resolution is chosen on the CPU from the GPU's
+//! `gridrt_grid::insert::box_cell_range`, or exact (`build_count_exact.wgsl`,
+//! `build_scatter_exact.wgsl`: the CPU's separating-axis test in binary64 on u32 words,
+//! `shared/overlap.wgsl`, so the same cells where WGSL has no f64); the resolution is chosen on the CPU from the GPU's
 //! bounds (the cost model samples triangles). The result is a [`GpuStructure`] the trace and
 //! render kernels use directly, and can be read back as the CPU's [`AnyGrid`].
 
@@ -46,9 +48,11 @@ const WORD: u64 = 4;
 pub struct GridBuilder {
     bounds: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
+    count_exact: wgpu::ComputePipeline,
     scan: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
+    scatter_exact: wgpu::ComputePipeline,
     sort: wgpu::ComputePipeline,
     cell_bits: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
@@ -92,9 +96,11 @@ impl GridBuilder {
         Ok(GridBuilder {
             bounds: pipeline(ctx, "build_bounds.wgsl", "build_bounds")?,
             count: pipeline(ctx, "build_count.wgsl", "build_count")?,
+            count_exact: pipeline(ctx, "build_count_exact.wgsl", "build_count_exact")?,
             scan: pipeline(ctx, "build_scan.wgsl", "build_scan")?,
             scan_add: pipeline(ctx, "build_scan_add.wgsl", "build_scan_add")?,
             scatter: pipeline(ctx, "build_scatter.wgsl", "build_scatter")?,
+            scatter_exact: pipeline(ctx, "build_scatter_exact.wgsl", "build_scatter_exact")?,
             sort: pipeline(ctx, "build_sort_cells.wgsl", "build_sort_cells")?,
             occupancy: pipeline(ctx, "build_occupancy.wgsl", "build_occupancy")?,
             cell_bits: pipeline(ctx, "build_cell_bits.wgsl", "build_cell_bits")?,
@@ -102,13 +108,13 @@ impl GridBuilder {
         })
     }
 
-    /// Whether the GPU builds `cfg`: flat and macrocell grids with box insertion.
+    /// Whether the GPU builds `cfg`: flat and macrocell grids, with either insertion.
     pub fn supports(cfg: &GridConfig) -> bool {
-        matches!(cfg.kind, GridKind::Flat | GridKind::Macrocell) && cfg.build.insert == InsertMode::BoundingBox
+        matches!(cfg.kind, GridKind::Flat | GridKind::Macrocell)
     }
 
     /// Builds `cfg` over the scene (whose CPU copy is `tris`, for the resolution choice): flat or
-    /// macrocell grids with box insertion; other kinds and exact insertion are refused.
+    /// macrocell grids, with box or exact insertion; other kinds are refused.
     pub async fn build_async(
         &self,
         ctx: &GpuContext,
@@ -118,8 +124,8 @@ impl GridBuilder {
     ) -> Result<GpuGrid, GpuError> {
         if !GridBuilder::supports(cfg) {
             return Err(GpuError::Unsupported(format!(
-                "the GPU build makes flat and macrocell grids with box insertion (asked: {} with {:?} insertion); use the CPU build",
-                cfg.kind, cfg.build.insert
+                "the GPU build makes flat and macrocell grids (asked: {}); use the CPU build",
+                cfg.kind
             )));
         }
         let mut times = PhaseTimes::default();
@@ -131,8 +137,10 @@ impl GridBuilder {
             times.record("resolution", || resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.parallel));
         check_cells(choice.resolution, cfg.cost.max_cells)?;
         let mut g = match cfg.kind {
-            GridKind::Macrocell => self.macrocell_async(ctx, scene, &bounds, choice.resolution, cfg.macro_size).await?,
-            _ => self.flat_async(ctx, scene, GridGeometry::new(&bounds, choice.resolution)).await?,
+            GridKind::Macrocell => {
+                self.macrocell_async(ctx, scene, &bounds, choice.resolution, cfg.macro_size, cfg.build.insert).await?
+            }
+            _ => self.flat_async(ctx, scene, GridGeometry::new(&bounds, choice.resolution), cfg.build.insert).await?,
         };
         times.0.append(&mut g.times.0);
         g.times = times;
@@ -174,11 +182,12 @@ impl GridBuilder {
         bounds: &Aabb,
         res: [u32; 3],
         a: Option<u32>,
+        insert: InsertMode,
     ) -> Result<GpuGrid, GpuError> {
         if let Some(a) = a {
             check_macro_size(a)?;
         }
-        let mut fine = self.flat_async(ctx, scene, GridGeometry::new(bounds, res)).await?;
+        let mut fine = self.flat_async(ctx, scene, GridGeometry::new(bounds, res), insert).await?;
         let (a, samples, (macro_res, bits)) = match a {
             Some(a) => {
                 let start = web_time::Instant::now();
@@ -325,13 +334,20 @@ impl GridBuilder {
         Ok(())
     }
 
-    /// Builds the flat grid `geom` over the scene's triangles (box insertion).
+    /// Builds the flat grid `geom` over the scene's triangles with insertion `insert`.
     pub async fn flat_async(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
         geom: GridGeometry,
+        insert: InsertMode,
     ) -> Result<GpuGrid, GpuError> {
+        let (count, scatter) = match insert {
+            InsertMode::BoundingBox => ((&self.count, "build_count"), (&self.scatter, "build_scatter")),
+            InsertMode::Exact => {
+                ((&self.count_exact, "build_count_exact"), (&self.scatter_exact, "build_scatter_exact"))
+            }
+        };
         let mut times = PhaseTimes::default();
         let cells = geom.cell_count();
         let n = scene.triangle_count;
@@ -349,15 +365,7 @@ impl GridBuilder {
         let start = web_time::Instant::now();
         let cell_start = Self::buffer(ctx, "cells", cells + 1, storage)?;
         let mut enc = Self::encoder(ctx, "grid build: count and scan");
-        Self::pass(
-            ctx,
-            &mut enc,
-            &self.count,
-            "build_count",
-            params,
-            n.div_ceil(GROUP),
-            &[&scene.triangles, &cell_start],
-        )?;
+        Self::pass(ctx, &mut enc, count.0, count.1, params, n.div_ceil(GROUP), &[&scene.triangles, &cell_start])?;
         self.scan(ctx, &mut enc, &cell_start, cells + 1)?;
         // The compact layout's occupancy words and their counts, scanned into ranks (as
         // FlatGrid::new makes them), from the scanned table; read back with the reference count.
@@ -397,8 +405,8 @@ impl GridBuilder {
         Self::pass(
             ctx,
             &mut enc,
-            &self.scatter,
-            "build_scatter",
+            scatter.0,
+            scatter.1,
             params,
             n.div_ceil(GROUP),
             &[&scene.triangles, &cursor, &refs],
@@ -519,8 +527,14 @@ impl GridBuilder {
     }
 
     /// [`GridBuilder::flat_async`], blocking.
-    pub fn build_flat(&self, ctx: &GpuContext, scene: &GpuScene, geom: GridGeometry) -> Result<GpuGrid, GpuError> {
-        pollster::block_on(self.flat_async(ctx, scene, geom))
+    pub fn build_flat(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        geom: GridGeometry,
+        insert: InsertMode,
+    ) -> Result<GpuGrid, GpuError> {
+        pollster::block_on(self.flat_async(ctx, scene, geom, insert))
     }
 
     /// [`GridBuilder::read_back_async`], blocking.

@@ -24,6 +24,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("build_scan.wgsl", include_str!("../../../shaders/build_scan.wgsl")),
     ("build_scan_add.wgsl", include_str!("../../../shaders/build_scan_add.wgsl")),
     ("build_scatter.wgsl", include_str!("../../../shaders/build_scatter.wgsl")),
+    ("build_count_exact.wgsl", include_str!("../../../shaders/build_count_exact.wgsl")),
+    ("build_scatter_exact.wgsl", include_str!("../../../shaders/build_scatter_exact.wgsl")),
     ("build_sort_cells.wgsl", include_str!("../../../shaders/build_sort_cells.wgsl")),
     ("build_occupancy.wgsl", include_str!("../../../shaders/build_occupancy.wgsl")),
     ("build_cell_bits.wgsl", include_str!("../../../shaders/build_cell_bits.wgsl")),
@@ -49,6 +51,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/build.wgsl", include_str!("../../../shaders/shared/build.wgsl")),
     ("shared/build_triangles.wgsl", include_str!("../../../shaders/shared/build_triangles.wgsl")),
     ("shared/soft_f64.wgsl", include_str!("../../../shaders/shared/soft_f64.wgsl")),
+    ("shared/overlap.wgsl", include_str!("../../../shaders/shared/overlap.wgsl")),
+    ("shared/build_exact.wgsl", include_str!("../../../shaders/shared/build_exact.wgsl")),
 ];
 
 /// Error composing a shader: an unknown file or include.

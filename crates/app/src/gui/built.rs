@@ -61,7 +61,7 @@ pub struct GpuBuild {
     pub builder: Arc<gridrt_gpu::build::GridBuilder>,
 }
 
-/// Builds `config` over `tris` on the GPU (flat or macrocell with box insertion; see
+/// Builds `config` over `tris` on the GPU (flat or macrocell, box or exact insertion; see
 /// [`gridrt_gpu::build`]) and reads it back for the stats panel and the measurements. Natively
 /// it runs to the end on a job thread ([`build_on_gpu`]); in a browser it is awaited on the
 /// page (the readbacks resolve between frames).

@@ -118,11 +118,11 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
     ui.checkbox(&mut g.build.parallel, "parallel build");
     let buildable = gridrt_gpu::build::GridBuilder::supports(g);
     ui.checkbox(&mut s.gpu_build, "build on the GPU").on_hover_text(
-        "Flat and macrocell grids with box insertion are built by WGSL kernels on this device \
-         (bit-identical to the CPU build); other structures are built on the CPU.",
+        "Flat and macrocell grids (box or exact insertion) are built by WGSL kernels on this \
+         device (bit-identical to the CPU build); other structures are built on the CPU.",
     );
     if s.gpu_build && !buildable {
-        ui.small(format!("{} with {:?} insertion: built on the CPU", g.kind, g.build.insert));
+        ui.small(format!("{}: built on the CPU", g.kind));
     }
     match g.kind {
         GridKind::Macrocell => {

@@ -24,7 +24,7 @@ pub struct Settings {
     pub heat_max: f32,
     /// Rendered pixels per screen pixel (the software adapter is slow: below 1 keeps it fluid).
     pub render_scale: f32,
-    /// Build flat and macrocell grids (box insertion) on the GPU (the native app; the result is
+    /// Build flat and macrocell grids (box or exact insertion) on the GPU (the native app; the result is
     /// the CPU build's, bit for bit).
     pub gpu_build: bool,
     pub show_cost_plot: bool,

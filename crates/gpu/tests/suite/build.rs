@@ -23,17 +23,17 @@ fn check(name: &str, tris: &[[Vec3; 3]], resolutions: &[[u32; 3]]) {
     let bounds = builder.bounds(ctx, &scene).unwrap();
     let cpu_bounds = triangle_bounds(tris);
     assert_eq!(bounds, cpu_bounds, "{name}: bounds");
-    for &res in resolutions {
+    for (&res, insert) in resolutions.iter().flat_map(|r| InsertMode::ALL.map(|i| (r, i))) {
         let geom = GridGeometry::new(&bounds, res);
-        let opts = BuildOptions { insert: InsertMode::BoundingBox, parallel: true };
+        let opts = BuildOptions { insert, parallel: true };
         let cpu = FlatGrid::build(tris, geom, opts, &mut PhaseTimes::default()).unwrap();
-        let g = builder.build_flat(ctx, &scene, geom).unwrap();
+        let g = builder.build_flat(ctx, &scene, geom, insert).unwrap();
         let AnyGrid::Flat(back) = builder.read_back(ctx, &g).unwrap() else { panic!("{name}: not a flat grid") };
-        assert_eq!(back.occupied, cpu.occupied, "{name} {res:?}: occupancy words");
-        assert_eq!(back.ref_start, cpu.ref_start, "{name} {res:?}: ref_start");
-        assert_eq!(back.refs, cpu.refs, "{name} {res:?}: refs");
-        assert_eq!(back, cpu, "{name} {res:?}");
-        println!("{name} {res:?}: {} cells, {} refs, equal ({:?})", g.cells, g.refs, g.times);
+        assert_eq!(back.occupied, cpu.occupied, "{name} {res:?} {insert:?}: occupancy words");
+        assert_eq!(back.ref_start, cpu.ref_start, "{name} {res:?} {insert:?}: ref_start");
+        assert_eq!(back.refs, cpu.refs, "{name} {res:?} {insert:?}: refs");
+        assert_eq!(back, cpu, "{name} {res:?} {insert:?}");
+        println!("{name} {res:?} {insert:?}: {} cells, {} refs, equal ({:?})", g.cells, g.refs, g.times);
     }
 }
 
@@ -79,7 +79,7 @@ fn gpu_build_of_shared_scenes_at_auto_resolution() {
         // Traced through the GPU-built buffers: the same hits as through the uploaded CPU grid.
         let builder = GridBuilder::new(ctx).unwrap();
         let scene = GpuScene::new(ctx, &tris).unwrap();
-        let g = builder.build_flat(ctx, &scene, *cpu.geometry()).unwrap();
+        let g = builder.build_flat(ctx, &scene, *cpu.geometry(), InsertMode::BoundingBox).unwrap();
         let uploaded = GpuStructure::new(ctx, &cpu).unwrap();
         let rays = gridrt_scene::rays::random_rays(&mesh.bounds(), 2000, 9);
         let tracer = gridrt_gpu::Tracer::new();
@@ -93,8 +93,8 @@ fn gpu_build_of_shared_scenes_at_auto_resolution() {
 }
 
 /// Through the whole pipeline (bounds, resolution choice, build): flat and macrocell grids
-/// (A given, and A chosen by the cost model from the fine grid) equal the CPU's, digests
-/// included; other kinds and exact insertion are refused with a message.
+/// (A given, and A chosen by the cost model from the fine grid), with box and exact insertion,
+/// equal the CPU's, digests included; other kinds are refused with a message.
 #[test]
 fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
     let Some(ctx) = gpu() else { return };
@@ -117,7 +117,11 @@ fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
                 ..GridConfig::default()
             },
         ];
-        for cfg in configs {
+        let exact = |cfg: GridConfig| GridConfig {
+            build: gridrt_grid::BuildOptions { insert: InsertMode::Exact, parallel: true },
+            ..cfg
+        };
+        for cfg in configs.into_iter().flat_map(|c| [c.clone(), exact(c)]) {
             let (cpu, report) = structure::build(tris, &cfg).unwrap();
             let g = builder.build(ctx, &scene, tris, &cfg).unwrap();
             let back = builder.read_back(ctx, &g).unwrap();
@@ -128,10 +132,7 @@ fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
         }
         for cfg in [
             GridConfig { kind: GridKind::Multires, ..GridConfig::default() },
-            GridConfig {
-                build: gridrt_grid::BuildOptions { insert: InsertMode::Exact, parallel: true },
-                ..GridConfig::default()
-            },
+            exact(GridConfig { kind: GridKind::TwoLevel, ..GridConfig::default() }),
         ] {
             let e = builder.build(ctx, &scene, tris, &cfg).unwrap_err().to_string();
             assert!(e.contains("use the CPU build"), "{e}");
