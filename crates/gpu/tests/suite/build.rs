@@ -121,7 +121,7 @@ fn gpu_build_of_every_supported_configuration_equals_the_cpu() {
             build: gridrt_grid::BuildOptions { insert: InsertMode::Exact, parallel: true },
             ..cfg
         };
-        for cfg in configs.into_iter().flat_map(|c| [c.clone(), exact(c)]) {
+        for cfg in configs.into_iter().flat_map(|c| [c, exact(c)]) {
             let (cpu, report) = structure::build(tris, &cfg).unwrap();
             let g = builder.build(ctx, &scene, tris, &cfg).unwrap();
             let back = builder.read_back(ctx, &g).unwrap();

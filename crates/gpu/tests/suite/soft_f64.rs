@@ -96,7 +96,7 @@ fn cases() -> Vec<(f64, f64, f32)> {
             3 => (rng.value(60) as f32) as f64 * (rng.value(60) as f32) as f64,
             _ => rng.value(480),
         };
-        let f = if r % 11 == 0 {
+        let f = if r.is_multiple_of(11) {
             f32s[(r >> 8) as usize % f32s.len()]
         } else {
             f32::from_bits(rng.next() as u32 & 0xFF7F_FFFF)
@@ -175,7 +175,7 @@ fn soft_f64_equals_the_cpu_bit_for_bit() {
             // Signed zeros are not compared (no decision depends on them), nor results whose
             // exact value lies below the normal range (flushed to zero by design).
             let e_value = f64::from_bits(e);
-            if g != e && !(e_value == 0.0 && f64::from_bits(g) == 0.0) && !(e_value.abs() < f64::MIN_POSITIVE) {
+            if g != e && !(e_value == 0.0 && f64::from_bits(g) == 0.0) && e_value.abs() >= f64::MIN_POSITIVE {
                 wrong.push(format!("{a:e} {name} {b:e} (f32 {f:e}): expected {e:016x}, got {g:016x}"));
             }
         }
