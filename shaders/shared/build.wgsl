@@ -19,6 +19,8 @@ struct BuildParams {
     groups_x: u32,
     // Fine cells per macrocell edge (build_occupancy).
     macro_edge: u32,
+    // build_insert_exact: 0 counts each cell's triangles, 1 scatters their indices.
+    scatter: u32,
 }
 
 struct CellRange {

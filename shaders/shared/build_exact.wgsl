@@ -7,11 +7,11 @@
 fn exact_overlap_test(v: Vertices, p: BuildParams) -> OverlapTest {
     let min = d3_from_f32(p.grid_min.xyz);
     let inv = d3_from_f32(p.inv_cell.xyz);
-    let g = array<D3, 3>(
-        d3_mul(d3_sub(d3_from_f32(v.a), min), inv),
-        d3_mul(d3_sub(d3_from_f32(v.b), min), inv),
-        d3_mul(d3_sub(d3_from_f32(v.c), min), inv),
-    );
+    var corners = array<vec3<f32>, 3>(v.a, v.b, v.c);
+    var g: array<D3, 3>;
+    for (var i = 0u; i < 3u; i++) {
+        g[i] = d3_mul(d3_sub(d3_from_f32(corners[i]), min), inv);
+    }
     // 0.5 + 1/256 is exact in f32.
     return overlap_test_new(g, f64_from_f32(0.5 + p.margin));
 }

@@ -2,7 +2,22 @@
 // axes, Akenine-Möller) operation for operation, in the binary64 of shared/soft_f64.wgsl, so
 // that the GPU build puts a triangle in exactly the CPU's cells. What depends on the triangle
 // alone is computed once (per axis its projected interval and the cube's projected radius).
+//
+// Binary64 on u32 words costs dozens of operations a step, so each comparison is first made in
+// f32 against a tolerance of OVERLAP_TOL times the magnitudes involved (plus OVERLAP_TINY): f32
+// copies of the values (each within 2^-23) and a few f32 operations are within about 6 · 2^-23
+// ≈ 7e-7 of those magnitudes, f64's own rounding far less, so a comparison decided by more than
+// the tolerance is decided the same way by f64 and by exact arithmetic. Only the comparisons
+// within the tolerance (cubes touching the triangle's planes within a few 1e-6 of a cell) run
+// in f64. For the same reason a row's candidate cubes are first narrowed to an interval of x
+// (`overlap_row_bounds`, widened by the tolerance): no cube the f64 test accepts lies outside
+// it, so the row's first and last overlapped cells, and thus the cells inserted, are the CPU's.
 //!include shared/soft_f64.wgsl
+
+// The pre-filter's relative tolerance (over five times the f32 error bound above) and its
+// absolute floor (above the values f32 flushes to zero, times the grid's extent).
+const OVERLAP_TOL: f32 = 4e-6;
+const OVERLAP_TINY: f32 = 1e-30;
 
 struct OverlapAxis {
     a: D3,
@@ -13,93 +28,165 @@ struct OverlapAxis {
 }
 
 struct OverlapTest {
-    // The triangle's bounding box.
-    lo: D3,
-    hi: D3,
-    // The cubes' half size.
-    h: F64,
-    // The nine edge × box-axis cross products that are not zero, then the normal.
-    axes: array<OverlapAxis, 10>,
+    // The box axes (the triangle's bounding box: the CPU tests it first), the nine edge ×
+    // box-axis cross products that are not zero, then the normal. A box axis is the CPU's box
+    // test exactly: its dot products with a point are the point's coordinate, and its radius h.
+    axes: array<OverlapAxis, 13>,
     n: u32,
+    // f32 copies for the pre-filter: per axis (a, r) and (lo, hi).
+    axes32: array<vec4<f32>, 13>,
+    bounds32: array<vec2<f32>, 13>,
 }
 
-// h · (|a.x| + |a.y| + |a.z|).
-fn overlap_radius(a: D3, h: F64) -> F64 {
-    return f64_mul(h, f64_add(f64_add(f64_abs(a.x), f64_abs(a.y)), f64_abs(a.z)));
+// Separating axis k of a triangle with edges `e`: for k < 3 box axis k; for k < 12 box axis
+// k % 3 crossed with edge k / 3 − 1 (glam's cross of a unit vector is the edge's components, one
+// negated, and zeros, up to the sign of zero, which no comparison sees); for k = 12 the normal
+// e0 × e1.
+fn overlap_axis_vector(e: ptr<function, array<D3, 3>>, k: u32) -> D3 {
+    let zero = F64(0u, 0u);
+    if k < 3u {
+        var a = D3(zero, zero, zero);
+        a[k] = f64_from_f32(1.0);
+        return a;
+    }
+    if k == 12u {
+        return d3_cross((*e)[0], (*e)[1]);
+    }
+    let d = (*e)[k / 3u - 1u];
+    switch k % 3u {
+        case 0u: {
+            return D3(zero, f64_neg(d[2]), d[1]);
+        }
+        case 1u: {
+            return D3(d[2], zero, f64_neg(d[0]));
+        }
+        default: {
+            return D3(f64_neg(d[1]), d[0], zero);
+        }
+    }
 }
 
 fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
     var t: OverlapTest;
     var vs = v;
-    var e = array<D3, 3>(d3_sub(v[1], v[0]), d3_sub(v[2], v[1]), d3_sub(v[0], v[2]));
-    let zero = F64(0u, 0u);
-    let one = f64_from_f32(1.0);
-    var basis = array<D3, 3>(D3(one, zero, zero), D3(zero, one, zero), D3(zero, zero, one));
-    var n = 0u;
+    var e: array<D3, 3>;
     for (var i = 0u; i < 3u; i++) {
-        for (var k = 0u; k < 3u; k++) {
-            let a = d3_cross(basis[k], e[i]);
-            if d3_is_zero(a) {
-                continue;
-            }
-            let p0 = d3_dot(a, vs[0]);
-            let p1 = d3_dot(a, vs[1]);
-            let p2 = d3_dot(a, vs[2]);
-            t.axes[n] = OverlapAxis(a, f64_min(f64_min(p0, p1), p2), f64_max(f64_max(p0, p1), p2), overlap_radius(a, h));
-            n += 1u;
-        }
+        e[i] = d3_sub(vs[(i + 1u) % 3u], vs[i]);
     }
-    // The plane (a degenerate triangle's zero normal never separates).
-    let normal = d3_cross(e[0], e[1]);
-    let d = d3_dot(normal, vs[0]);
-    t.axes[n] = OverlapAxis(normal, d, d, overlap_radius(normal, h));
-    t.n = n + 1u;
-    t.lo = d3_min(d3_min(v[0], v[1]), v[2]);
-    t.hi = d3_max(d3_max(v[0], v[1]), v[2]);
-    t.h = h;
+    var n = 0u;
+    for (var k = 0u; k < 13u; k++) {
+        let a = overlap_axis_vector(&e, k);
+        // A zero edge axis is skipped; the plane's interval is the single value n·v0 (a
+        // degenerate triangle's zero normal never separates).
+        if k >= 3u && k < 12u && d3_is_zero(a) {
+            continue;
+        }
+        var lo = d3_dot(a, vs[0]);
+        var hi = lo;
+        for (var j = 1u; j < select(3u, 1u, k == 12u); j++) {
+            let p = d3_dot(a, vs[j]);
+            lo = f64_min(lo, p);
+            hi = f64_max(hi, p);
+        }
+        // h · (|a.x| + |a.y| + |a.z|).
+        var sum = f64_abs(a[0]);
+        for (var c = 1u; c < 3u; c++) {
+            sum = f64_add(sum, f64_abs(a[c]));
+        }
+        let r = f64_mul(h, sum);
+        t.axes[n] = OverlapAxis(a, lo, hi, r);
+        t.axes32[n] = vec4<f32>(d3_to_f32_approx(a), f64_to_f32_approx(r));
+        t.bounds32[n] = vec2<f32>(f64_to_f32_approx(lo), f64_to_f32_approx(hi));
+        n += 1u;
+    }
+    t.n = n;
     return t;
 }
 
-// Whether the cube at `c` overlaps (or touches) the triangle.
-fn overlap_test_overlaps(t: ptr<function, OverlapTest>, c: D3) -> bool {
-    let lo = d3_sub((*t).lo, c);
-    let hi = d3_sub((*t).hi, c);
-    let h = (*t).h;
-    let nh = f64_neg(h);
-    if f64_gt(lo.x, h) || f64_gt(lo.y, h) || f64_gt(lo.z, h) || f64_lt(hi.x, nh) || f64_lt(hi.y, nh) || f64_lt(hi.z, nh) {
-        return false;
-    }
+// Whether the cube at cell (x, y, z)'s center overlaps (or touches) the triangle: the CPU's
+// `OverlapTest::overlaps`, each comparison decided in f32 where the tolerance allows.
+fn overlap_test_overlaps(t: ptr<function, OverlapTest>, x: u32, y: u32, z: u32) -> bool {
+    let c32 = vec3<f32>(f32(x), f32(y), f32(z)) + vec3<f32>(0.5);
     for (var i = 0u; i < (*t).n; i++) {
-        let axis = (*t).axes[i];
-        let ac = d3_dot(axis.a, c);
-        if f64_gt(f64_sub(axis.lo, ac), axis.r) || f64_lt(f64_sub(axis.hi, ac), f64_neg(axis.r)) {
+        let a = (*t).axes32[i];
+        let p = (*t).bounds32[i];
+        let ac = dot(a.xyz, c32);
+        let tol = OVERLAP_TOL * (abs(p.x) + abs(p.y) + a.w + dot(abs(a.xyz), c32)) + OVERLAP_TINY;
+        let below = p.x - ac;
+        let above = p.y - ac;
+        if below > a.w + tol || above < -a.w - tol {
             return false;
+        }
+        if below >= a.w - tol || above <= -a.w + tol {
+            let axis = (*t).axes[i];
+            let ac64 = d3_dot(axis.a, d3_from_f32(c32));
+            if f64_gt(f64_sub(axis.lo, ac64), axis.r) || f64_lt(f64_sub(axis.hi, ac64), f64_neg(axis.r)) {
+                return false;
+            }
         }
     }
     return true;
 }
 
-// The center of cell (x, y, z) (exact: coordinates below 2^23).
-fn overlap_cell_center(x: u32, y: u32, z: u32) -> D3 {
-    return d3_from_f32(vec3<f32>(f32(x), f32(y), f32(z)) + vec3<f32>(0.5));
+// The x of the centers of the cubes at (·, y, z), x ≤ x_max + 1, that may overlap the
+// triangle, as an interval (lo > hi: none): per axis, its condition solved for x with the
+// tolerance added, so that it holds wherever the f64 test's does.
+fn overlap_row_bounds(t: ptr<function, OverlapTest>, y: u32, z: u32, x_max: u32) -> vec2<f32> {
+    let cy = f32(y) + 0.5;
+    let cz = f32(z) + 0.5;
+    let cx = f32(x_max) + 1.0;
+    var lo = -3.0e38;
+    var hi = 3.0e38;
+    for (var i = 0u; i < (*t).n; i++) {
+        let a = (*t).axes32[i];
+        let p = (*t).bounds32[i];
+        let rest = a.y * cy + a.z * cz;
+        let tol = OVERLAP_TOL * (abs(p.x) + abs(p.y) + a.w + abs(a.x) * cx + abs(a.y) * cy + abs(a.z) * cz) + OVERLAP_TINY;
+        // min − a·c ≤ r and max − a·c ≥ −r, with a·c = a.x·x + rest.
+        let below = p.x - a.w - tol - rest;
+        let above = p.y + a.w + tol - rest;
+        if a.x == 0.0 {
+            if below > 0.0 || above < 0.0 {
+                return vec2<f32>(1.0, 0.0);
+            }
+            continue;
+        }
+        let q0 = below / a.x;
+        let q1 = above / a.x;
+        lo = max(lo, min(q0, q1));
+        hi = min(hi, max(q0, q1));
+    }
+    // The divisions' rounding.
+    return vec2<f32>(lo - 1e-3 - 1e-6 * abs(lo), hi + 1e-3 + 1e-6 * abs(hi));
 }
 
 // The cells of row (y, z) between x0 and x1 the triangle goes into: from its first overlapped
 // cell to its last (gridrt_grid::insert::for_each_run_in_layers: the cells between are taken
 // untested), as (first, last); first > last when it overlaps none.
 fn overlap_row_run(t: ptr<function, OverlapTest>, x0: u32, x1: u32, y: u32, z: u32) -> vec2<u32> {
-    var first = x0;
+    // Centers x + 0.5 within the bounds: x from ceil(lo − 0.5) to floor(hi − 0.5).
+    let b = overlap_row_bounds(t, y, z, x1);
+    if !(b.x <= b.y) {
+        return vec2<u32>(1u, 0u);
+    }
+    let lo = clamp(ceil(b.x - 0.5), f32(x0), f32(x1) + 1.0);
+    let hi = clamp(floor(b.y - 0.5), f32(x0) - 1.0, f32(x1));
+    if lo > hi {
+        return vec2<u32>(1u, 0u);
+    }
+    var first = u32(lo);
+    let end = u32(hi);
     loop {
-        if first > x1 {
+        if first > end {
             return vec2<u32>(1u, 0u);
         }
-        if overlap_test_overlaps(t, overlap_cell_center(first, y, z)) {
+        if overlap_test_overlaps(t, first, y, z) {
             break;
         }
         first += 1u;
     }
-    var last = x1;
-    while last > first && !overlap_test_overlaps(t, overlap_cell_center(last, y, z)) {
+    var last = end;
+    while last > first && !overlap_test_overlaps(t, last, y, z) {
         last -= 1u;
     }
     return vec2<u32>(first, last);

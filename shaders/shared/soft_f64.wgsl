@@ -13,12 +13,9 @@
 alias F64 = vec2<u32>;
 alias U64 = vec2<u32>;
 
-// A vector of three f64, as glam's DVec3.
-struct D3 {
-    x: F64,
-    y: F64,
-    z: F64,
-}
+// A vector of three f64 (glam's DVec3), indexed so that its helpers below are loops: the
+// shader compiler inlines every call, and each loop body holds one copy of an operation.
+alias D3 = array<F64, 3>;
 
 const F64_SIGN: u32 = 0x80000000u;
 
@@ -308,45 +305,85 @@ fn f64_from_f32(x: f32) -> F64 {
     return F64(f << 29u, sign | (u32(e + 896) << 20u) | (f >> 3u));
 }
 
-fn d3_from_f32(v: vec3<f32>) -> D3 {
-    return D3(f64_from_f32(v.x), f64_from_f32(v.y), f64_from_f32(v.z));
+// An f32 within a relative 2^-23 of `a` (truncated; below f32's normal range, zero): for
+// pre-filters whose tolerance covers it, never for a result that must equal the CPU's.
+fn f64_to_f32_approx(a: F64) -> f32 {
+    let e = f64_exp(a) - 896;
+    let sign = a.y & F64_SIGN;
+    if e <= 0 {
+        return bitcast<f32>(sign);
+    }
+    if e >= 255 {
+        return bitcast<f32>(sign | 0x7f800000u);
+    }
+    return bitcast<f32>(sign | (u32(e) << 23u) | ((a.y & 0xfffffu) << 3u) | (a.x >> 29u));
 }
 
-fn d3_add(a: D3, b: D3) -> D3 {
-    return D3(f64_add(a.x, b.x), f64_add(a.y, b.y), f64_add(a.z, b.z));
+fn d3_to_f32_approx(a: D3) -> vec3<f32> {
+    return vec3<f32>(f64_to_f32_approx(a[0]), f64_to_f32_approx(a[1]), f64_to_f32_approx(a[2]));
+}
+
+fn d3_from_f32(v: vec3<f32>) -> D3 {
+    var r: D3;
+    for (var c = 0u; c < 3u; c++) {
+        r[c] = f64_from_f32(v[c]);
+    }
+    return r;
 }
 
 fn d3_sub(a: D3, b: D3) -> D3 {
-    return D3(f64_sub(a.x, b.x), f64_sub(a.y, b.y), f64_sub(a.z, b.z));
+    var r: D3;
+    for (var c = 0u; c < 3u; c++) {
+        r[c] = f64_sub(a[c], b[c]);
+    }
+    return r;
 }
 
 fn d3_mul(a: D3, b: D3) -> D3 {
-    return D3(f64_mul(a.x, b.x), f64_mul(a.y, b.y), f64_mul(a.z, b.z));
+    var r: D3;
+    for (var c = 0u; c < 3u; c++) {
+        r[c] = f64_mul(a[c], b[c]);
+    }
+    return r;
 }
 
 // glam's DVec3::dot: (x·x' + y·y') + z·z'.
 fn d3_dot(a: D3, b: D3) -> F64 {
-    return f64_add(f64_add(f64_mul(a.x, b.x), f64_mul(a.y, b.y)), f64_mul(a.z, b.z));
+    var r = f64_mul(a[0], b[0]);
+    for (var c = 1u; c < 3u; c++) {
+        r = f64_add(r, f64_mul(a[c], b[c]));
+    }
+    return r;
 }
 
-// glam's DVec3::cross.
+// glam's DVec3::cross: component c is a[c+1]·b[c+2] − b[c+1]·a[c+2].
 fn d3_cross(a: D3, b: D3) -> D3 {
-    return D3(
-        f64_sub(f64_mul(a.y, b.z), f64_mul(b.y, a.z)),
-        f64_sub(f64_mul(a.z, b.x), f64_mul(b.z, a.x)),
-        f64_sub(f64_mul(a.x, b.y), f64_mul(b.x, a.y)),
-    );
+    var r: D3;
+    for (var c = 0u; c < 3u; c++) {
+        let i = (c + 1u) % 3u;
+        let j = (c + 2u) % 3u;
+        r[c] = f64_sub(f64_mul(a[i], b[j]), f64_mul(b[i], a[j]));
+    }
+    return r;
 }
 
 // glam's DVec3::min and max (componentwise).
 fn d3_min(a: D3, b: D3) -> D3 {
-    return D3(f64_min(a.x, b.x), f64_min(a.y, b.y), f64_min(a.z, b.z));
+    var r: D3;
+    for (var c = 0u; c < 3u; c++) {
+        r[c] = f64_min(a[c], b[c]);
+    }
+    return r;
 }
 
 fn d3_max(a: D3, b: D3) -> D3 {
-    return D3(f64_max(a.x, b.x), f64_max(a.y, b.y), f64_max(a.z, b.z));
+    var r: D3;
+    for (var c = 0u; c < 3u; c++) {
+        r[c] = f64_max(a[c], b[c]);
+    }
+    return r;
 }
 
 fn d3_is_zero(a: D3) -> bool {
-    return f64_is_zero(a.x) && f64_is_zero(a.y) && f64_is_zero(a.z);
+    return f64_is_zero(a[0]) && f64_is_zero(a[1]) && f64_is_zero(a[2]);
 }

@@ -8,8 +8,8 @@
 //! occupancy bits from the occupancy words (`build_occupancy.wgsl`, per candidate A when the
 //! cost model chooses A, as on the CPU).
 //! Insertion is by bounding box with the conservative margin, the same f32 rule as
-//! `gridrt_grid::insert::box_cell_range`, or exact (`build_count_exact.wgsl`,
-//! `build_scatter_exact.wgsl`: the CPU's separating-axis test in binary64 on u32 words,
+//! `gridrt_grid::insert::box_cell_range`, or exact (`build_insert_exact.wgsl`, counting and
+//! then scattering: the CPU's separating-axis test in binary64 on u32 words,
 //! `shared/overlap.wgsl`, so the same cells where WGSL has no f64); the resolution is chosen on the CPU from the GPU's
 //! bounds (the cost model samples triangles). The result is a [`GpuStructure`] the trace and
 //! render kernels use directly, and can be read back as the CPU's [`AnyGrid`].
@@ -48,11 +48,10 @@ const WORD: u64 = 4;
 pub struct GridBuilder {
     bounds: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
-    count_exact: wgpu::ComputePipeline,
     scan: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
-    scatter_exact: wgpu::ComputePipeline,
+    insert_exact: wgpu::ComputePipeline,
     sort: wgpu::ComputePipeline,
     cell_bits: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
@@ -96,11 +95,10 @@ impl GridBuilder {
         Ok(GridBuilder {
             bounds: pipeline(ctx, "build_bounds.wgsl", "build_bounds")?,
             count: pipeline(ctx, "build_count.wgsl", "build_count")?,
-            count_exact: pipeline(ctx, "build_count_exact.wgsl", "build_count_exact")?,
             scan: pipeline(ctx, "build_scan.wgsl", "build_scan")?,
             scan_add: pipeline(ctx, "build_scan_add.wgsl", "build_scan_add")?,
             scatter: pipeline(ctx, "build_scatter.wgsl", "build_scatter")?,
-            scatter_exact: pipeline(ctx, "build_scatter_exact.wgsl", "build_scatter_exact")?,
+            insert_exact: pipeline(ctx, "build_insert_exact.wgsl", "build_insert_exact")?,
             sort: pipeline(ctx, "build_sort_cells.wgsl", "build_sort_cells")?,
             occupancy: pipeline(ctx, "build_occupancy.wgsl", "build_occupancy")?,
             cell_bits: pipeline(ctx, "build_cell_bits.wgsl", "build_cell_bits")?,
@@ -342,10 +340,11 @@ impl GridBuilder {
         geom: GridGeometry,
         insert: InsertMode,
     ) -> Result<GpuGrid, GpuError> {
+        // Exact insertion counts and scatters with one kernel (`BuildParams::scatter` 0, then 1).
         let (count, scatter) = match insert {
             InsertMode::BoundingBox => ((&self.count, "build_count"), (&self.scatter, "build_scatter")),
             InsertMode::Exact => {
-                ((&self.count_exact, "build_count_exact"), (&self.scatter_exact, "build_scatter_exact"))
+                ((&self.insert_exact, "build_insert_exact"), (&self.insert_exact, "build_insert_exact"))
             }
         };
         let mut times = PhaseTimes::default();
@@ -365,7 +364,13 @@ impl GridBuilder {
         let start = web_time::Instant::now();
         let cell_start = Self::buffer(ctx, "cells", cells + 1, storage)?;
         let mut enc = Self::encoder(ctx, "grid build: count and scan");
-        Self::pass(ctx, &mut enc, count.0, count.1, params, n.div_ceil(GROUP), &[&scene.triangles, &cell_start])?;
+        // The exact kernel's refs binding, unused when it counts.
+        let no_refs = Self::buffer(ctx, "grid build: no refs", 1, wgpu::BufferUsages::STORAGE)?;
+        let mut count_buffers = vec![&scene.triangles, &cell_start];
+        if insert == InsertMode::Exact {
+            count_buffers.push(&no_refs);
+        }
+        Self::pass(ctx, &mut enc, count.0, count.1, params, n.div_ceil(GROUP), &count_buffers)?;
         self.scan(ctx, &mut enc, &cell_start, cells + 1)?;
         // The compact layout's occupancy words and their counts, scanned into ranks (as
         // FlatGrid::new makes them), from the scanned table; read back with the reference count.
@@ -407,7 +412,7 @@ impl GridBuilder {
             &mut enc,
             scatter.0,
             scatter.1,
-            params,
+            BuildParams { scatter: 1, ..params },
             n.div_ceil(GROUP),
             &[&scene.triangles, &cursor, &refs],
         )?;

@@ -155,4 +155,7 @@ pub struct BuildParams {
     pub groups_x: u32,
     /// Fine cells per macrocell edge (the occupancy pass).
     pub macro_edge: u32,
+    /// The exact insertion pass: 0 counts, 1 scatters.
+    pub scatter: u32,
+    pub _pad: [u32; 3],
 }

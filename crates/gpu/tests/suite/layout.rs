@@ -52,7 +52,7 @@ fn rust_and_wgsl_structs_have_the_same_layout() {
         build,
         "BuildParams",
         BuildParams,
-        [grid_min, inv_cell, res, triangle_count, margin, count, groups_x, macro_edge]
+        [grid_min, inv_cell, res, triangle_count, margin, count, groups_x, macro_edge, scatter]
     );
     // The ray record is also the ray file's.
     assert_eq!(size_of::<GpuRay>(), size_of::<gridrt_scene::Ray>());

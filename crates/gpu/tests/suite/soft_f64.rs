@@ -9,7 +9,7 @@ use wgpu::util::DeviceExt;
 use super::common::gpu;
 
 /// Each case: a, b (f64 bits) and an f32's bits; each result: a + b, a − b, a · b (two words
-/// each, low first), the f32 as f64, and a < b.
+/// each, low first), the f32 as f64, a < b, and a as an approximate f32.
 const ENTRY: &str = r#"
 @group(0) @binding(0) var<storage, read> cases: array<u32>;
 @group(0) @binding(1) var<storage, read_write> results: array<u32>;
@@ -25,10 +25,11 @@ fn soft_f64_check(@builtin(global_invocation_id) id: vec3<u32>) {
     let f = f64_from_f32(bitcast<f32>(cases[5u * i + 4u]));
     let out = array<F64, 4>(f64_add(a, b), f64_sub(a, b), f64_mul(a, b), f);
     for (var k = 0u; k < 4u; k++) {
-        results[9u * i + 2u * k] = out[k].x;
-        results[9u * i + 2u * k + 1u] = out[k].y;
+        results[10u * i + 2u * k] = out[k].x;
+        results[10u * i + 2u * k + 1u] = out[k].y;
     }
-    results[9u * i + 8u] = select(0u, 1u, f64_lt(a, b));
+    results[10u * i + 8u] = select(0u, 1u, f64_lt(a, b));
+    results[10u * i + 9u] = bitcast<u32>(f64_to_f32_approx(a));
 }
 "#;
 
@@ -133,7 +134,7 @@ fn soft_f64_equals_the_cpu_bit_for_bit() {
         contents: bytemuck::cast_slice(&words),
         usage: wgpu::BufferUsages::STORAGE,
     });
-    let size = (cases.len() * 9 * 4) as u64;
+    let size = (cases.len() * 10 * 4) as u64;
     let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("soft_f64 results"),
         size,
@@ -168,7 +169,7 @@ fn soft_f64_equals_the_cpu_bit_for_bit() {
     let word = |k: usize| got[k] as u64 | (got[k + 1] as u64) << 32;
     let mut wrong = Vec::new();
     for (i, &(a, b, f)) in cases.iter().enumerate() {
-        let r = 9 * i;
+        let r = 10 * i;
         let expect = [(a + b).to_bits(), (a - b).to_bits(), (a * b).to_bits(), (f as f64).to_bits()];
         for (k, (name, e)) in ["+", "-", "*", "from f32"].iter().zip(expect).enumerate() {
             let g = word(r + 2 * k);
@@ -184,6 +185,19 @@ fn soft_f64_equals_the_cpu_bit_for_bit() {
         }
         if (got[r + 8] == 1) != (a < b) {
             wrong.push(format!("{a:e} < {b:e}: got {}", got[r + 8]));
+        }
+        // Within a relative 2^-23, never larger in magnitude, the same sign; zero below f32's
+        // normal range.
+        let approx = f32::from_bits(got[r + 9]) as f64;
+        let close = if a.abs() < f32::MIN_POSITIVE as f64 {
+            approx == 0.0
+        } else if a.abs() >= 2f64.powi(128) {
+            approx.is_infinite()
+        } else {
+            (approx - a).abs() <= a.abs() * 2f64.powi(-23) && approx.abs() <= a.abs() && approx.signum() == a.signum()
+        };
+        if !close {
+            wrong.push(format!("{a:e} as f32: got {approx:e}"));
         }
     }
     assert!(
