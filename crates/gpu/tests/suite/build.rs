@@ -64,6 +64,47 @@ fn gpu_build_equals_the_cpu_build() {
     }
     // Three scan levels: more than 4096² cells + 1.
     check("one triangle, 17M cells", &scenes[5].1, &[[260, 256, 256]]);
+    // Exact insertion where f32 cannot decide: planes touching cells' (enlarged) cubes exactly.
+    check("touching planes", &touching_planes(), &[[256, 256, 256]]);
+}
+
+/// Triangles whose planes touch a cell's cube (half size 0.5 + the insertion margin) exactly or
+/// miss or cut it by a unit in the last place of a coordinate, on a grid of unit cells from the
+/// origin (256³ over [0, 256]³): f64 holds the normal (products of ~40 bits) and rounds little,
+/// while f32 rounds it and the sums after it by far more than the offsets, so f32 alone would land
+/// on either side. Exact insertion on the GPU must decide them in f64, as the CPU does.
+fn touching_planes() -> Vec<[Vec3; 3]> {
+    let h = 0.5 + gridrt_grid::geometry::INSERT_MARGIN_CELLS as f32;
+    let mut tris = vec![[Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]];
+    tris.push([Vec3::splat(256.0), Vec3::new(255.0, 256.0, 256.0), Vec3::new(256.0, 255.0, 256.0)]);
+    let mut seed = 0x9e37_79b9u32;
+    let mut next = |n: u32| {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed % n
+    };
+    for _ in 0..400 {
+        // The plane a·x + b·y + z = k through the corner of cube c nearest to it (or farthest
+        // below, with the sign s): k = a·cx + b·cy + cz ± h (a + b + 1).
+        let (a, b) = ((1 + next(4)) as f32, (1 + next(4)) as f32);
+        let s = if next(2) == 0 { 1.0 } else { -1.0 };
+        let c = Vec3::new(80.0 + next(40) as f32, 80.0 + next(40) as f32, 0.0) + Vec3::splat(0.5);
+        let c = Vec3::new(c.x, c.y, 120.5);
+        // Touching, or a few units of the last place of z (2^-16 at 128–256) off.
+        let off = (next(5) as f32 - 2.0) / 65536.0;
+        let k = a * c.x + b * c.y + c.z + s * h * (a + b + 1.0) + off;
+        // Edges of 19 and 20 significant bits (multiples of 2^-16, as every coordinate), so the
+        // normal's components need about 40 bits: f32 rounds them, f64 holds them.
+        let p = (2 * next(1 << 19) + (1 << 19) + 1) as f32 / 65536.0;
+        let q = (2 * next(1 << 18) + (1 << 18) + 1) as f32 / 65536.0;
+        let v0 = Vec3::new(c.x - 2.0, c.y - 1.0, 0.0);
+        let v0 = Vec3::new(v0.x, v0.y, k - a * v0.x - b * v0.y);
+        let v1 = v0 + Vec3::new(p, 0.0, -a * p);
+        let v2 = v0 + Vec3::new(0.0, q, -b * q);
+        tris.push([v0, v1, v2]);
+    }
+    tris
 }
 
 #[test]
