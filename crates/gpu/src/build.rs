@@ -51,7 +51,9 @@ pub struct GridBuilder {
     scan: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
-    insert_exact: wgpu::ComputePipeline,
+    /// Created at the first exact build: its shader is long (emulated f64), and a software
+    /// adapter or a browser would compile it at start-up for nothing.
+    insert_exact: std::sync::OnceLock<wgpu::ComputePipeline>,
     sort: wgpu::ComputePipeline,
     cell_bits: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
@@ -98,12 +100,21 @@ impl GridBuilder {
             scan: pipeline(ctx, "build_scan.wgsl", "build_scan")?,
             scan_add: pipeline(ctx, "build_scan_add.wgsl", "build_scan_add")?,
             scatter: pipeline(ctx, "build_scatter.wgsl", "build_scatter")?,
-            insert_exact: pipeline(ctx, "build_insert_exact.wgsl", "build_insert_exact")?,
+            insert_exact: std::sync::OnceLock::new(),
             sort: pipeline(ctx, "build_sort_cells.wgsl", "build_sort_cells")?,
             occupancy: pipeline(ctx, "build_occupancy.wgsl", "build_occupancy")?,
             cell_bits: pipeline(ctx, "build_cell_bits.wgsl", "build_cell_bits")?,
             compact: pipeline(ctx, "build_compact.wgsl", "build_compact")?,
         })
+    }
+
+    /// The exact insertion kernel, created on first use.
+    fn insert_exact(&self, ctx: &GpuContext) -> Result<&wgpu::ComputePipeline, GpuError> {
+        if let Some(p) = self.insert_exact.get() {
+            return Ok(p);
+        }
+        let p = pipeline(ctx, "build_insert_exact.wgsl", "build_insert_exact")?;
+        Ok(self.insert_exact.get_or_init(|| p))
     }
 
     /// Whether the GPU builds `cfg`: flat and macrocell grids, with either insertion.
@@ -344,7 +355,8 @@ impl GridBuilder {
         let (count, scatter) = match insert {
             InsertMode::BoundingBox => ((&self.count, "build_count"), (&self.scatter, "build_scatter")),
             InsertMode::Exact => {
-                ((&self.insert_exact, "build_insert_exact"), (&self.insert_exact, "build_insert_exact"))
+                let exact = self.insert_exact(ctx)?;
+                ((exact, "build_insert_exact"), (exact, "build_insert_exact"))
             }
         };
         let mut times = PhaseTimes::default();
