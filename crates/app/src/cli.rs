@@ -89,6 +89,9 @@ pub struct AppArgs {
     /// Build flat and macrocell grids on the GPU (overrides the saved setting).
     #[arg(long)]
     pub gpu_build: bool,
+    /// Insert triangles by exact triangle/box overlap (overrides the saved setting).
+    #[arg(long)]
+    pub exact: bool,
 }
 
 /// The app's extra windows.

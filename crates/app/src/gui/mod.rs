@@ -171,6 +171,9 @@ impl GridrtApp {
         if args.gpu_build {
             settings.gpu_build = true;
         }
+        if args.exact {
+            settings.grid.build.insert = gridrt_grid::InsertMode::Exact;
+        }
         if args.measure {
             settings.show_cost_plot = true;
         }
