@@ -92,6 +92,10 @@ pub struct AppArgs {
     /// Insert triangles by exact triangle/box overlap (overrides the saved setting).
     #[arg(long)]
     pub exact: bool,
+    /// Trace the frames on the CPU, on every core, instead of the GPU (overrides the saved
+    /// setting; faster where the adapter is a software one).
+    #[arg(long)]
+    pub cpu_trace: bool,
 }
 
 /// The app's extra windows.

@@ -599,13 +599,14 @@ fn app_screenshots_under_xvfb() {
     let scene = tmp("app-teapot.glb");
     ok(&["gen", "teapot-in-stadium", "--size", "1", "-o", s(&scene)]);
     let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
-    let shot = |grid: &str, view: &str, packets: &str| -> image::RgbaImage {
-        let png = out_dir.join(format!("app-{grid}-{view}-packets-{packets}.png"));
+    let shot_on = |grid: &str, view: &str, packets: &str, cpu: bool| -> image::RgbaImage {
+        let png = out_dir.join(format!("app-{grid}-{view}-packets-{packets}-cpu-{cpu}.png"));
         let _ = std::fs::remove_file(&png);
         let out = gridrt_cmd()
             // Inside the stadium, close to the knot: the walls are far behind it.
             .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--grid", grid, "--view", view])
             .args(["--camera", "0.25,0.18,0.35,0,0,0,50", "--render-scale", "0.5", "--packets", packets])
+            .args(cpu.then_some("--cpu-trace"))
             .env("DISPLAY", &x.display)
             .env_remove("WAYLAND_DISPLAY")
             .output()
@@ -616,6 +617,7 @@ fn app_screenshots_under_xvfb() {
         println!("{grid} {view}: {}", log.lines().find(|l| l.contains("saved")).unwrap_or_default());
         image::open(&png).expect("reading the screenshot").to_rgba8()
     };
+    let shot = |grid: &str, view: &str, packets: &str| shot_on(grid, view, packets, false);
     for grid in ["flat", "macrocell", "multires", "twolevel", "proximity"] {
         let img = shot(grid, "shaded", "off");
         assert!(img.width() >= 640 && img.height() >= 400, "{grid}: {}x{}", img.width(), img.height());
@@ -638,6 +640,22 @@ fn app_screenshots_under_xvfb() {
     let (single, packets) =
         (centre_pixels(&shot("flat", "shaded", "off")), centre_pixels(&shot("flat", "shaded", "on")));
     assert_eq!(single, packets, "the app's flat frame in packets differs from single rays");
+
+    // Frames traced on the CPU (`--cpu-trace`): the GPU's image, in single rays, in packets and
+    // in a heatmap.
+    for (grid, view, packets) in
+        [("flat", "shaded", "off"), ("macrocell", "shaded", "on"), ("macrocell", "heatmap-cells", "off")]
+    {
+        let (gpu, cpu) =
+            (centre_pixels(&shot(grid, view, packets)), centre_pixels(&shot_on(grid, view, packets, true)));
+        let differ = gpu.iter().zip(&cpu).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differ,
+            0,
+            "{grid} {view} packets {packets}: {differ} of {} centre pixels differ on the CPU",
+            gpu.len()
+        );
+    }
 
     // A 3840×2160 frame (more pixels than one storage binding holds): rendered in tiles.
     let png = out_dir.join("app-3840x2160.png");

@@ -185,7 +185,8 @@ impl FrameTarget {
                 format: DISPLAY_FORMAT,
                 usage: wgpu::TextureUsages::STORAGE_BINDING
                     | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST,
                 view_formats: &[],
             })
         });
@@ -218,6 +219,28 @@ impl FrameTarget {
     /// Most pixels one tile may have ([`Renderer::encode_tile`]).
     pub fn tile_capacity(&self) -> u32 {
         self.capacity
+    }
+
+    /// Puts an RGBA8 image of the target's size made elsewhere (a frame traced on the CPU) into
+    /// the display texture, after the work already submitted.
+    pub fn write_image(&self, ctx: &GpuContext, rgba: &[u8]) -> Result<(), GpuError> {
+        let texture =
+            self.texture.as_ref().ok_or(GpuError::Unsupported("an image for a target without a texture".into()))?;
+        if rgba.len() != self.width as usize * self.height as usize * 4 {
+            return Err(GpuError::Unsupported(format!(
+                "an image of {} bytes for a {}x{} target",
+                rgba.len(),
+                self.width,
+                self.height
+            )));
+        }
+        ctx.queue.write_texture(
+            texture.as_image_copy(),
+            rgba,
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(self.width * 4), rows_per_image: None },
+            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+        );
+        Ok(())
     }
 
     /// A sampling view of the display texture (for egui); `None` without a texture.

@@ -3,29 +3,15 @@
 //! threads, in coherent packets by default, and shaded by the CPU port of the shade kernel.
 //! Optionally the primary rays and hits, and a JSON summary.
 
-use std::time::Instant;
-
 use anyhow::Context;
 use gridrt_gpu::{GpuSession, RenderOptions};
-use gridrt_grid::{AnyGrid, PacketOptions, PacketStats};
-use gridrt_scene::{Camera, Hit, Ray};
-use rayon::prelude::*;
+use gridrt_grid::{AnyGrid, PacketStats};
+use gridrt_scene::Camera;
 use serde_json::json;
 
 use super::build_grid;
 use crate::cli::{Device, RenderArgs};
-
-/// What one frame cost and gave.
-struct Rendered {
-    rgba: Vec<u8>,
-    hits: Vec<Hit>,
-    primary_ms: f64,
-    /// The shadow pass (shaded view): shadow rays from the primary hits and their trace.
-    shadow_ms: Option<f64>,
-    cells_per_ray: f64,
-    tests_per_ray: f64,
-    packets: PacketStats,
-}
+use crate::lab::frame::{Rendered, cpu_frame};
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
@@ -180,53 +166,4 @@ fn gpu_packets(grid: &AnyGrid, o: &RenderOptions) -> u64 {
     let edge = gridrt_gpu::Kernel::PACKET_EDGE;
     let passes = if o.view == gridrt_gpu::View::Shaded { 2 } else { 1 };
     o.width.div_ceil(edge) as u64 * o.height.div_ceil(edge) as u64 * passes
-}
-
-/// The frame on the CPU: primary rays, shadow rays from their hits, shading (the CPU ports of
-/// the render kernels). `packets`: trace both passes in coherent packets.
-fn cpu_frame(
-    grid: &AnyGrid,
-    tris: &[[glam::Vec3; 3]],
-    bounds: &gridrt_scene::Aabb,
-    opts: &RenderOptions,
-    primary: &[Ray],
-    packets: Option<PacketOptions>,
-) -> Rendered {
-    let shade = gridrt_gpu::render::shade_params(bounds, opts);
-    let topts = gridrt_grid::TraceOptions { traversal: opts.traversal, mailbox: opts.mailbox, ..Default::default() };
-    let width = opts.width as usize;
-    // Per-ray counts only for the heatmaps (single rays; packets keep none).
-    let per_ray = opts.view.is_heatmap();
-    let trace = |rays: &[Ray],
-                 topts: gridrt_grid::TraceOptions|
-     -> (Vec<Hit>, Vec<gridrt_grid::RayStats>, gridrt_grid::BatchStats, PacketStats) {
-        if per_ray && packets.is_none() {
-            let (h, s): (Vec<Hit>, Vec<_>) = rays.par_iter().map(|r| grid.trace(tris, r, topts)).unzip();
-            let mut b = gridrt_grid::BatchStats::default();
-            h.iter().zip(&s).for_each(|(h, s)| b.add(*s, h.is_hit()));
-            return (h, s, b, PacketStats::default());
-        }
-        let (h, b, ps) = crate::lab::frame::trace_frame(grid, tris, rays, width, topts, packets);
-        (h, Vec::new(), b, ps)
-    };
-    let start = Instant::now();
-    let (hits, stats, batch, ps) = trace(primary, topts);
-    let primary_ms = start.elapsed().as_secs_f64() * 1e3;
-    let start = Instant::now();
-    let mut shadow = Vec::new();
-    crate::lab::frame::shadow_rays_from_hits(&shade, primary, &hits, &mut shadow);
-    // Shadow rays only ask whether anything occludes the light (any hit).
-    let (shadow_hits, _, _, sps) = trace(&shadow, topts.occlusion());
-    let shadow_ms = start.elapsed().as_secs_f64() * 1e3;
-    let stats = per_ray.then_some(&stats[..]);
-    let rgba = crate::lab::frame::shade_pixels(&shade, tris, primary, &hits, stats, &shadow_hits);
-    Rendered {
-        rgba,
-        hits,
-        primary_ms,
-        shadow_ms: Some(shadow_ms),
-        cells_per_ray: batch.mean_cells(),
-        tests_per_ray: batch.mean_tests(),
-        packets: ps.merge(sps),
-    }
 }

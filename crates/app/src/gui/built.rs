@@ -12,7 +12,8 @@ use gridrt_scene::ClipTime;
 pub struct Built {
     pub scene_generation: u64,
     pub config: GridConfig,
-    pub grid: AnyGrid,
+    /// Shared with the threads that trace frames on the CPU.
+    pub grid: Arc<AnyGrid>,
     pub report: BuildReport,
     /// Where it was built.
     pub built_on: BuiltOn,
@@ -88,6 +89,7 @@ pub async fn build_on_gpu_async(
         stats: grid.stats(tris.len()),
     };
     let on_gpu = Some(OnGpu { structure: g.structure, scene, upload_ms });
+    let grid = Arc::new(grid);
     Ok(Built { scene_generation, config: *config, grid, report, built_on: BuiltOn::Gpu, pose: None, on_gpu })
 }
 
@@ -114,6 +116,7 @@ pub struct Posed {
 pub fn build_structure(tris: &[[Vec3; 3]], config: &GridConfig, scene_generation: u64) -> Result<Built, String> {
     let (grid, report) =
         structure::build(tris, config).map_err(|e| format!("building the {} grid: {e}", config.kind))?;
+    let grid = Arc::new(grid);
     Ok(Built { scene_generation, config: *config, grid, report, built_on: BuiltOn::Cpu, pose: None, on_gpu: None })
 }
 

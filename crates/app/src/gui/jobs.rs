@@ -173,7 +173,7 @@ pub fn spawn_build(
             let built = r.and_then(|bytes| decode_structure(&bytes)).map(|(grid, report)| Built {
                 scene_generation,
                 config,
-                grid,
+                grid: Arc::new(grid),
                 report,
                 built_on: super::built::BuiltOn::Worker,
                 pose: worker_pose,
@@ -284,7 +284,7 @@ mod tests {
             let b = build_structure(&s.tris, &cfg, 1).unwrap();
             let bytes = encode_structure(&b.grid, &b.report).unwrap();
             let (grid, report) = decode_structure(&bytes).unwrap();
-            assert_eq!(grid, b.grid, "{kind}");
+            assert_eq!(grid, *b.grid, "{kind}");
             assert_eq!(serde_json::to_string(&report).unwrap(), serde_json::to_string(&b.report).unwrap());
         }
         assert!(decode_structure(&[1, 2, 3]).is_err());

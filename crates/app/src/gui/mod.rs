@@ -57,6 +57,7 @@ struct RenderKey {
     heat_max: f32,
     size: [u32; 2],
     structure: u64,
+    cpu_trace: bool,
 }
 
 pub struct GridrtApp {
@@ -173,6 +174,9 @@ impl GridrtApp {
         }
         if args.exact {
             settings.grid.build.insert = gridrt_grid::InsertMode::Exact;
+        }
+        if args.cpu_trace {
+            settings.cpu_trace = true;
         }
         if args.measure {
             settings.show_cost_plot = true;
@@ -317,19 +321,35 @@ impl GridrtApp {
             heat_max: self.settings.heat_max,
             size,
             structure: b.id,
+            cpu_trace: cfg!(not(target_arch = "wasm32")) && self.settings.cpu_trace,
         };
         // Smoke mode renders its N frames back to back.
         let smoke_wants_frame =
             self.smoke.as_ref().is_some_and(|sm| self.viewport.frames_done < sm.frames as u64) && !self.viewport.busy();
         if Some(key) != self.last_key || smoke_wants_frame {
-            self.viewport.start(&self.render_options(key.camera, size));
+            let opts = self.render_options(key.camera, size);
+            #[cfg(not(target_arch = "wasm32"))]
+            if key.cpu_trace {
+                let tris = b.built.pose.as_ref().map_or_else(|| scene.loaded.tris.clone(), |p| p.tris.clone());
+                let bounds = scene.loaded.bounds;
+                self.viewport.start_cpu(viewport::CpuRequest { opts, grid: b.built.grid.clone(), tris, bounds });
+            } else {
+                self.viewport.cancel_cpu();
+                self.viewport.start(&opts);
+            }
+            #[cfg(target_arch = "wasm32")]
+            self.viewport.start(&opts);
             self.last_key = Some(key);
         }
-        match self
-            .viewport
-            .step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds })
-            .and_then(|done| gpu.ctx.check_device().map(|()| done))
-        {
+        #[cfg(not(target_arch = "wasm32"))]
+        let stepped = if key.cpu_trace {
+            self.viewport.step_cpu(gpu)
+        } else {
+            self.viewport.step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds })
+        };
+        #[cfg(target_arch = "wasm32")]
+        let stepped = self.viewport.step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds });
+        match stepped.and_then(|done| gpu.ctx.check_device().map(|()| done)) {
             // A finished frame ends an earlier render error.
             Ok(true) => {
                 self.errors.clear(|k| *k == ErrorKind::Render);

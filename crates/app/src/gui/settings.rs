@@ -27,6 +27,9 @@ pub struct Settings {
     /// Build flat and macrocell grids (box or exact insertion) on the GPU (the native app; the result is
     /// the CPU build's, bit for bit).
     pub gpu_build: bool,
+    /// Trace the frames on the CPU (the render kernels' CPU ports on every core; native app):
+    /// faster than a software adapter, the same image.
+    pub cpu_trace: bool,
     pub show_cost_plot: bool,
     pub show_explainer: bool,
     pub explainer: super::explainer::ExplainerState,
@@ -45,6 +48,7 @@ impl Default for Settings {
             heat_max: 64.0,
             render_scale: 0.5,
             gpu_build: false,
+            cpu_trace: false,
             show_cost_plot: false,
             show_explainer: false,
             explainer: Default::default(),

@@ -123,6 +123,38 @@ pub struct Viewport {
     pub last: Option<FrameStats>,
     /// Frames completed since start.
     pub frames_done: u64,
+    /// Natively, frames traced on the CPU instead (`Settings::cpu_trace`).
+    #[cfg(not(target_arch = "wasm32"))]
+    cpu: CpuFrames,
+}
+
+/// A frame to trace on the CPU: what the GPU's frame reads, as the CPU holds it.
+#[cfg(not(target_arch = "wasm32"))]
+#[derive(Debug)]
+pub struct CpuRequest {
+    pub opts: RenderOptions,
+    pub grid: Arc<gridrt_grid::AnyGrid>,
+    pub tris: Arc<Vec<[glam::Vec3; 3]>>,
+    pub bounds: gridrt_scene::Aabb,
+}
+
+/// The frame being traced on a job thread, and the one asked for after it (a newer request
+/// replaces an older waiting one; the one being traced finishes).
+#[cfg(not(target_arch = "wasm32"))]
+#[derive(Debug, Default)]
+struct CpuFrames {
+    job: Option<super::jobs::Job<CpuFrame>>,
+    next: Option<CpuRequest>,
+}
+
+/// A frame traced on the CPU: the image, its counts and its wall-clock time.
+#[cfg(not(target_arch = "wasm32"))]
+#[derive(Debug)]
+struct CpuFrame {
+    opts: RenderOptions,
+    rgba: Vec<u8>,
+    totals: FrameTotals,
+    ms: f64,
 }
 
 impl Default for Viewport {
@@ -138,6 +170,8 @@ impl Default for Viewport {
             waiter: None,
             last: None,
             frames_done: 0,
+            #[cfg(not(target_arch = "wasm32"))]
+            cpu: CpuFrames::default(),
         }
     }
 }
@@ -178,6 +212,10 @@ impl Viewport {
 
     /// A frame is being rendered or waits to start.
     pub fn busy(&self) -> bool {
+        #[cfg(not(target_arch = "wasm32"))]
+        if self.cpu.job.is_some() || self.cpu.next.is_some() {
+            return true;
+        }
         self.in_flight.is_some() || self.restart.is_some()
     }
 
@@ -378,4 +416,75 @@ impl Viewport {
             let _ = gpu.ctx.device.poll(wgpu::PollType::wait_indefinitely());
         }
     }
+}
+
+/// Frames traced on the CPU (native): the render kernels' CPU ports on every core
+/// (`crate::lab::frame::cpu_frame`, as `gridrt render --backend cpu`), the image written into
+/// the display texture the GPU's frames go to.
+#[cfg(not(target_arch = "wasm32"))]
+impl Viewport {
+    /// Asks for a frame traced on the CPU; it starts when the one being traced is done. A GPU
+    /// frame in flight is dropped.
+    pub fn start_cpu(&mut self, req: CpuRequest) {
+        self.cancel();
+        self.cpu.next = Some(req);
+    }
+
+    /// Forgets the CPU's frames (tracing went back to the GPU); one being traced finishes
+    /// unseen.
+    pub fn cancel_cpu(&mut self) {
+        self.cpu = CpuFrames::default();
+    }
+
+    /// Shows a frame the CPU finished and starts the next one. Returns true when a frame
+    /// completed.
+    pub fn step_cpu(&mut self, gpu: &Gpu) -> Result<bool, GpuError> {
+        let mut completed = false;
+        if let Some(job) = &mut self.cpu.job
+            && let Some(result) = job.poll()
+        {
+            self.cpu.job = None;
+            let f = result.map_err(|detail| GpuError::Readback { what: "a frame traced on the CPU", detail })?;
+            let (w, h) = (f.opts.width, f.opts.height);
+            if self.target.as_ref().is_none_or(|t| (t.width, t.height) != (w, h)) {
+                self.target = Some(FrameTarget::new(&gpu.ctx, w, h, true)?);
+            }
+            let target = self.target.as_ref().expect("target");
+            target.write_image(&gpu.ctx, &f.rgba)?;
+            self.last = Some(FrameStats { width: w, height: h, ms: f.ms, totals: f.totals, view: f.opts.view });
+            self.frames_done += 1;
+            completed = true;
+            self.show_target(gpu);
+        }
+        if self.cpu.job.is_none()
+            && let Some(req) = self.cpu.next.take()
+        {
+            self.cpu.job =
+                Some(super::jobs::Job::spawn("tracing a frame on the CPU", &gpu.ui, move || trace_on_cpu(req)));
+        }
+        Ok(completed)
+    }
+}
+
+/// Traces and shades one frame on the CPU: coherent packets when the settings ask for them
+/// (single rays for the heatmaps, which need per-ray counts).
+#[cfg(not(target_arch = "wasm32"))]
+fn trace_on_cpu(req: CpuRequest) -> CpuFrame {
+    let started = Instant::now();
+    let o = req.opts;
+    let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&o.camera, o.width, o.height));
+    let packets = (o.packets && !o.view.is_heatmap())
+        .then_some(gridrt_grid::PacketOptions { tile: gridrt_gpu::Kernel::PACKET_EDGE, mailbox: o.mailbox });
+    let r = crate::lab::frame::cpu_frame(&req.grid, &req.tris, &req.bounds, &o, &primary, packets);
+    let rays = primary.len() as u64;
+    let hits = r.hits.iter().filter(|h| h.is_hit()).count() as u32;
+    let split = |v: u64| [v as u32, (v >> 32) as u32];
+    let totals = FrameTotals {
+        cells: split((r.cells_per_ray * rays as f64).round() as u64),
+        tests: split((r.tests_per_ray * rays as f64).round() as u64),
+        hits,
+        rays: rays as u32,
+        pad: [0; 2],
+    };
+    CpuFrame { opts: o, rgba: r.rgba, totals, ms: started.elapsed().as_secs_f64() * 1e3 }
 }

@@ -1,8 +1,11 @@
 //! CPU frames: the render kernels' CPU ports (`gridrt_gpu::cpu`, one pixel each) over a whole
-//! frame, in parallel. `render --backend cpu`, `animate` and `bench --dynamic` trace their frames
-//! with them.
+//! frame, in parallel. `render --backend cpu`, `animate`, `bench --dynamic` and the app's CPU
+//! trace trace their frames with them.
+
+use std::time::Instant;
 
 use glam::Vec3;
+use gridrt_gpu::RenderOptions;
 use gridrt_gpu::layout::ShadeParams;
 use gridrt_grid::{AnyGrid, BatchStats, PacketOptions, PacketStats, RayStats, TraceOptions};
 use gridrt_scene::{Hit, Ray};
@@ -53,4 +56,65 @@ pub fn shade_pixels(
         })
         .flatten_iter()
         .collect()
+}
+
+/// What one frame cost and gave.
+pub struct Rendered {
+    pub rgba: Vec<u8>,
+    pub hits: Vec<Hit>,
+    pub primary_ms: f64,
+    /// The shadow pass (shaded view): shadow rays from the primary hits and their trace.
+    pub shadow_ms: Option<f64>,
+    pub cells_per_ray: f64,
+    pub tests_per_ray: f64,
+    pub packets: PacketStats,
+}
+
+/// The frame on the CPU: primary rays, shadow rays from their hits, shading (the CPU ports of
+/// the render kernels). `packets`: trace both passes in coherent packets.
+pub fn cpu_frame(
+    grid: &AnyGrid,
+    tris: &[[glam::Vec3; 3]],
+    bounds: &gridrt_scene::Aabb,
+    opts: &RenderOptions,
+    primary: &[Ray],
+    packets: Option<PacketOptions>,
+) -> Rendered {
+    let shade = gridrt_gpu::render::shade_params(bounds, opts);
+    let topts = gridrt_grid::TraceOptions { traversal: opts.traversal, mailbox: opts.mailbox, ..Default::default() };
+    let width = opts.width as usize;
+    // Per-ray counts only for the heatmaps (single rays; packets keep none).
+    let per_ray = opts.view.is_heatmap();
+    let trace = |rays: &[Ray],
+                 topts: gridrt_grid::TraceOptions|
+     -> (Vec<Hit>, Vec<gridrt_grid::RayStats>, gridrt_grid::BatchStats, PacketStats) {
+        if per_ray && packets.is_none() {
+            let (h, s): (Vec<Hit>, Vec<_>) = rays.par_iter().map(|r| grid.trace(tris, r, topts)).unzip();
+            let mut b = gridrt_grid::BatchStats::default();
+            h.iter().zip(&s).for_each(|(h, s)| b.add(*s, h.is_hit()));
+            return (h, s, b, PacketStats::default());
+        }
+        let (h, b, ps) = trace_frame(grid, tris, rays, width, topts, packets);
+        (h, Vec::new(), b, ps)
+    };
+    let start = Instant::now();
+    let (hits, stats, batch, ps) = trace(primary, topts);
+    let primary_ms = start.elapsed().as_secs_f64() * 1e3;
+    let start = Instant::now();
+    let mut shadow = Vec::new();
+    shadow_rays_from_hits(&shade, primary, &hits, &mut shadow);
+    // Shadow rays only ask whether anything occludes the light (any hit).
+    let (shadow_hits, _, _, sps) = trace(&shadow, topts.occlusion());
+    let shadow_ms = start.elapsed().as_secs_f64() * 1e3;
+    let stats = per_ray.then_some(&stats[..]);
+    let rgba = shade_pixels(&shade, tris, primary, &hits, stats, &shadow_hits);
+    Rendered {
+        rgba,
+        hits,
+        primary_ms,
+        shadow_ms: Some(shadow_ms),
+        cells_per_ray: batch.mean_cells(),
+        tests_per_ray: batch.mean_tests(),
+        packets: ps.merge(sps),
+    }
 }
