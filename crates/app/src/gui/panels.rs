@@ -309,7 +309,7 @@ pub fn stats(
         }
         if let Some(f) = frame {
             row("frame", format!("{}×{}", f.width, f.height));
-            row("frame ms", format!("{:.1}", f.ms));
+            row("frame ms", format!("{:.1} ({})", f.ms, if f.on_cpu { "CPU" } else { "GPU" }));
             row("Mrays/s", format!("{:.2} ({} rays)", f.mrays_per_s(), f.rays()));
             row("cells / ray", format!("{:.2}", f.mean_cells()));
             row("tests / ray", format!("{:.2}", f.mean_tests()));

@@ -211,7 +211,7 @@ pub fn ui(ui: &mut egui::Ui, tl: &mut Timeline, clips: &[Clip]) {
     let text = match (tl.fps(), tl.mean(30)) {
         (Some(fps), Some(m)) => format!(
             "{fps:.1} frames/s, each posed, rebuilt and traced · mean of the last 30: pose {:.1} ms, build {:.1} ms, \
-             upload {:.1} ms, trace {:.1} ms (GPU)",
+             upload {:.1} ms, trace {:.1} ms",
             m.pose_ms, m.build_ms, m.upload_ms, m.trace_ms
         ),
         _ => format!("{} frames shown", tl.frames_shown),

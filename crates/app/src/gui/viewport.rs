@@ -47,6 +47,8 @@ pub struct FrameStats {
     pub ms: f64,
     pub totals: FrameTotals,
     pub view: View,
+    /// Traced on the CPU (`Settings::cpu_trace`), not on the GPU.
+    pub on_cpu: bool,
 }
 
 impl FrameStats {
@@ -272,6 +274,7 @@ impl Viewport {
                     ms: f.gpu_ms,
                     totals: target.take_totals()?,
                     view: f.opts.view,
+                    on_cpu: false,
                 });
                 self.frames_done += 1;
                 completed = true;
@@ -451,7 +454,8 @@ impl Viewport {
             }
             let target = self.target.as_ref().expect("target");
             target.write_image(&gpu.ctx, &f.rgba)?;
-            self.last = Some(FrameStats { width: w, height: h, ms: f.ms, totals: f.totals, view: f.opts.view });
+            self.last =
+                Some(FrameStats { width: w, height: h, ms: f.ms, totals: f.totals, view: f.opts.view, on_cpu: true });
             self.frames_done += 1;
             completed = true;
             self.show_target(gpu);
