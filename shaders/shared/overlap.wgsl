@@ -81,19 +81,35 @@ fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
         if k >= 3u && k < 12u && d3_is_zero(a) {
             continue;
         }
-        var lo = d3_dot(a, vs[0]);
-        var hi = lo;
-        for (var j = 1u; j < select(3u, 1u, k == 12u); j++) {
-            let p = d3_dot(a, vs[j]);
-            lo = f64_min(lo, p);
-            hi = f64_max(hi, p);
+        // A box axis' dot products are the corners' coordinates and its radius is h, exactly
+        // (products with 1 and 0, sums with zeros), so they are taken as such.
+        let box_axis = k < 3u;
+        var lo: F64;
+        var hi: F64;
+        for (var j = 0u; j < select(3u, 1u, k == 12u); j++) {
+            var p: F64;
+            if box_axis {
+                p = vs[j][k];
+            } else {
+                p = d3_dot(a, vs[j]);
+            }
+            if j == 0u {
+                lo = p;
+                hi = p;
+            } else {
+                lo = f64_min(lo, p);
+                hi = f64_max(hi, p);
+            }
         }
         // h · (|a.x| + |a.y| + |a.z|).
-        var sum = f64_abs(a[0]);
-        for (var c = 1u; c < 3u; c++) {
-            sum = f64_add(sum, f64_abs(a[c]));
+        var r = h;
+        if !box_axis {
+            var sum = f64_abs(a[0]);
+            for (var c = 1u; c < 3u; c++) {
+                sum = f64_add(sum, f64_abs(a[c]));
+            }
+            r = f64_mul(h, sum);
         }
-        let r = f64_mul(h, sum);
         t.axes[n] = OverlapAxis(a, lo, hi, r);
         t.axes32[n] = vec4<f32>(d3_to_f32_approx(a), f64_to_f32_approx(r));
         t.bounds32[n] = vec2<f32>(f64_to_f32_approx(lo), f64_to_f32_approx(hi));
