@@ -1,4 +1,5 @@
 //!include shared/walker_common.wgsl
+//!include shared/u64.wgsl
 // Liu's integer one-pass walker: slice by slice along the dominant axis in 20-bit fixed point,
 // the cells of each slice queued in order (exact 64-bit wall comparisons).
 // CPU port (same names, same arithmetic): crates/grid/src/traversal/liu.rs.
@@ -48,26 +49,6 @@ fn liu_cell_of(x: i32, s: i32) -> i32 {
         return x >> LIU_FRAC_BITS;
     }
     return -((-x) >> LIU_FRAC_BITS) - 1;
-}
-
-// Full 32x32 -> 64-bit product as (hi, lo).
-fn mul_wide(a: u32, b: u32) -> vec2<u32> {
-    let a0 = a & 0xffffu;
-    let a1 = a >> 16u;
-    let b0 = b & 0xffffu;
-    let b1 = b >> 16u;
-    let p00 = a0 * b0;
-    let p01 = a0 * b1;
-    let p10 = a1 * b0;
-    let p11 = a1 * b1;
-    let mid = (p00 >> 16u) + (p01 & 0xffffu) + (p10 & 0xffffu);
-    let lo = (p00 & 0xffffu) | (mid << 16u);
-    let hi = p11 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u);
-    return vec2<u32>(hi, lo);
-}
-
-fn wide_ge(x: vec2<u32>, y: vec2<u32>) -> bool {
-    return x.x > y.x || (x.x == y.x && x.y >= y.y);
 }
 
 fn liu_target(x: i32, s: i32, c: i32, hi: i32) -> i32 {
@@ -133,7 +114,7 @@ fn liu_fill_slice(w: ptr<function, Walker>) {
             let wall_w = (cell[ww] + select(0, 1, sw > 0)) << LIU_FRAC_BITS;
             let ev = u32(abs((*w).end.x - wall_v));
             let ew = u32(abs((*w).end.y - wall_w));
-            move_v = wide_ge(mul_wide(ev, u32(abs((*w).k.y))), mul_wide(ew, u32(abs((*w).k.x))));
+            move_v = !u64_lt(u32_mul_wide(ev, u32(abs((*w).k.y))), u32_mul_wide(ew, u32(abs((*w).k.x))));
         }
         if move_v {
             cell[v] += sv;

@@ -10,8 +10,8 @@
 //! Insertion is by bounding box with the conservative margin, the same f32 rule as
 //! `gridrt_grid::insert::box_cell_range`, or exact (`build_insert_exact.wgsl`, counting and
 //! then scattering: the CPU's separating-axis test in binary64 on u32 words,
-//! `shared/overlap.wgsl`, so the same cells where WGSL has no f64); the resolution is chosen on the CPU from the GPU's
-//! bounds (the cost model samples triangles). The result is a [`GpuStructure`] the trace and
+//! `shared/overlap.wgsl`, so the same cells where WGSL has no f64); the resolution is chosen on
+//! the CPU from the GPU's bounds (the cost model samples triangles). The result is a [`GpuStructure`] the trace and
 //! render kernels use directly, and can be read back as the CPU's [`AnyGrid`].
 
 use glam::{UVec3, Vec3};
@@ -377,11 +377,10 @@ impl GridBuilder {
         let cell_start = Self::buffer(ctx, "cells", cells + 1, storage)?;
         let mut enc = Self::encoder(ctx, "grid build: count and scan");
         // The exact kernel's refs binding, unused when it counts.
-        let no_refs = Self::buffer(ctx, "grid build: no refs", 1, wgpu::BufferUsages::STORAGE)?;
-        let mut count_buffers = vec![&scene.triangles, &cell_start];
-        if insert == InsertMode::Exact {
-            count_buffers.push(&no_refs);
-        }
+        let no_refs = (insert == InsertMode::Exact)
+            .then(|| Self::buffer(ctx, "grid build: no refs", 1, wgpu::BufferUsages::STORAGE))
+            .transpose()?;
+        let count_buffers: Vec<&wgpu::Buffer> = [&scene.triangles, &cell_start].into_iter().chain(&no_refs).collect();
         Self::pass(ctx, &mut enc, count.0, count.1, params, n.div_ceil(GROUP), &count_buffers)?;
         self.scan(ctx, &mut enc, &cell_start, cells + 1)?;
         // The compact layout's occupancy words and their counts, scanned into ranks (as

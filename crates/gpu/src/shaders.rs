@@ -49,6 +49,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/render_bindings.wgsl", include_str!("../../../shaders/shared/render_bindings.wgsl")),
     ("shared/build.wgsl", include_str!("../../../shaders/shared/build.wgsl")),
     ("shared/build_triangles.wgsl", include_str!("../../../shaders/shared/build_triangles.wgsl")),
+    ("shared/u64.wgsl", include_str!("../../../shaders/shared/u64.wgsl")),
     ("shared/soft_f64.wgsl", include_str!("../../../shaders/shared/soft_f64.wgsl")),
     ("shared/overlap.wgsl", include_str!("../../../shaders/shared/overlap.wgsl")),
     ("shared/build_exact.wgsl", include_str!("../../../shaders/shared/build_exact.wgsl")),
