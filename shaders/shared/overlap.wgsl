@@ -4,19 +4,22 @@
 // alone is computed once (per axis its projected interval and the cube's projected radius).
 //
 // Binary64 on u32 words costs dozens of operations a step, so each comparison is first made in
-// f32 against a tolerance of OVERLAP_TOL times the magnitudes involved (plus OVERLAP_TINY): f32
-// copies of the values (each within 2^-23) and a few f32 operations are within about 6 · 2^-23
-// ≈ 7e-7 of those magnitudes, f64's own rounding far less, so a comparison decided by more than
-// the tolerance is decided the same way by f64 and by exact arithmetic. Only the comparisons
-// within the tolerance (cubes touching the triangle's planes within a few 1e-6 of a cell) run
-// in f64. For the same reason a row's candidate cubes are first narrowed to an interval of x
+// f32, relative to the triangle's first corner (kept as two f32, so a cube's offset from it is
+// exact to f32's precision), against a tolerance of OVERLAP_TOL times the magnitudes involved
+// (plus OVERLAP_TINY). The f32 axes (the f64 edges rounded, their cross product in f32), the
+// corners' offsets, the dot products and the radii are within about 8 · 2^-23 ≈ 1e-6 of those
+// magnitudes of the values the CPU computes in f64 (whose own rounding is far smaller), so a
+// comparison decided by more than the tolerance is decided the same way in f64. Only a
+// triangle with a comparison within the tolerance (a cube touching one of its planes within
+// ~1e-5 of a cell) has its axes computed in f64 (`overlap_test_f64`), and only such a comparison
+// is made in f64. For the same reason a row's candidate cubes are first narrowed to an interval
 // (`overlap_row_bounds`, widened by the tolerance): no cube the f64 test accepts lies outside
 // it, so the row's first and last overlapped cells, and thus the cells inserted, are the CPU's.
 //!include shared/soft_f64.wgsl
 
-// The pre-filter's relative tolerance (over five times the f32 error bound above) and its
-// absolute floor (above the values f32 flushes to zero, times the grid's extent).
-const OVERLAP_TOL: f32 = 4e-6;
+// The pre-filter's relative tolerance (16 times the f32 error bound above) and its absolute
+// floor (above what f32 flushes to zero, times the grid's extent).
+const OVERLAP_TOL: f32 = 1.6e-5;
 const OVERLAP_TINY: f32 = 1e-30;
 
 struct OverlapAxis {
@@ -28,14 +31,28 @@ struct OverlapAxis {
 }
 
 struct OverlapTest {
+    // The triangle's corners in grid space and the cubes' half size, from which the f64 axes
+    // are made when a comparison first needs them.
+    v: array<D3, 3>,
+    h: F64,
+    has_f64: bool,
     // The box axes (the triangle's bounding box: the CPU tests it first), the nine edge ×
     // box-axis cross products that are not zero, then the normal. A box axis is the CPU's box
     // test exactly: its dot products with a point are the point's coordinate, and its radius h.
     axes: array<OverlapAxis, 13>,
     n: u32,
-    // f32 copies for the pre-filter: per axis (a, r) and (lo, hi).
+    // The pre-filter, the same axes in f32: (a, r); the triangle's interval relative to corner
+    // 0 and a bound on |a|₁ (for the normal also |e0|₁ |e1|₁, its rounding's scale).
     axes32: array<vec4<f32>, 13>,
-    bounds32: array<vec2<f32>, 13>,
+    bounds32: array<vec3<f32>, 13>,
+    // Corner 0 as hi + lo, and the larger of the other corners' offsets from it (|·|₁).
+    v0_hi: vec3<f32>,
+    v0_lo: vec3<f32>,
+    extent: f32,
+}
+
+fn l1(v: vec3<f32>) -> f32 {
+    return abs(v.x) + abs(v.y) + abs(v.z);
 }
 
 // Separating axis k of a triangle with edges `e`: for k < 3 box axis k; for k < 12 box axis
@@ -66,9 +83,10 @@ fn overlap_axis_vector(e: ptr<function, array<D3, 3>>, k: u32) -> D3 {
     }
 }
 
-fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
-    var t: OverlapTest;
-    var vs = v;
+// The f64 axes (`OverlapTest::new` on the CPU), in the order and with the skips of the f32 ones.
+fn overlap_test_f64(t: ptr<function, OverlapTest>) {
+    var vs = (*t).v;
+    let h = (*t).h;
     var e: array<D3, 3>;
     for (var i = 0u; i < 3u; i++) {
         e[i] = d3_sub(vs[(i + 1u) % 3u], vs[i]);
@@ -110,9 +128,65 @@ fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
             }
             r = f64_mul(h, sum);
         }
-        t.axes[n] = OverlapAxis(a, lo, hi, r);
-        t.axes32[n] = vec4<f32>(d3_to_f32_approx(a), f64_to_f32_approx(r));
-        t.bounds32[n] = vec2<f32>(f64_to_f32_approx(lo), f64_to_f32_approx(hi));
+        (*t).axes[n] = OverlapAxis(a, lo, hi, r);
+        n += 1u;
+    }
+    (*t).n = n;
+    (*t).has_f64 = true;
+}
+
+// The test of a triangle with corners `v` (grid space) against cubes of half size `h`: the f32
+// pre-filter; the f64 axes wait until a comparison needs them.
+fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
+    var t: OverlapTest;
+    t.v = v;
+    t.h = h;
+    t.has_f64 = false;
+    var vs = v;
+    var e: array<D3, 3>;
+    var e32: array<vec3<f32>, 3>;
+    for (var i = 0u; i < 3u; i++) {
+        e[i] = d3_sub(vs[(i + 1u) % 3u], vs[i]);
+        e32[i] = d3_to_f32_approx(e[i]);
+    }
+    // The other corners' offsets from corner 0: e0 and −e2.
+    let c1 = e32[0];
+    let c2 = -e32[2];
+    t.v0_hi = d3_to_f32_approx(vs[0]);
+    t.v0_lo = d3_to_f32_approx(d3_sub(vs[0], d3_from_f32(t.v0_hi)));
+    t.extent = max(l1(c1), l1(c2));
+    let h32 = f64_to_f32_approx(h);
+    var n = 0u;
+    for (var k = 0u; k < 13u; k++) {
+        var a = vec3<f32>(0.0);
+        var bound = 0.0;
+        if k < 3u {
+            a[k] = 1.0;
+        } else if k < 12u {
+            // Box axis k % 3 × edge k / 3 − 1, skipped where the CPU's (f64) one is zero.
+            let d = e[k / 3u - 1u];
+            let d32 = e32[k / 3u - 1u];
+            let i = (k + 1u) % 3u;
+            let j = (k + 2u) % 3u;
+            if f64_is_zero(d[i]) && f64_is_zero(d[j]) {
+                continue;
+            }
+            a[i] = -d32[j];
+            a[j] = d32[i];
+        } else {
+            a = cross(e32[0], e32[1]);
+            bound = l1(e32[0]) * l1(e32[1]);
+        }
+        var lo = 0.0;
+        var hi = 0.0;
+        if k < 12u {
+            let p1 = dot(a, c1);
+            let p2 = dot(a, c2);
+            lo = min(0.0, min(p1, p2));
+            hi = max(0.0, max(p1, p2));
+        }
+        t.axes32[n] = vec4<f32>(a, h32 * l1(a));
+        t.bounds32[n] = vec3<f32>(lo, hi, l1(a) + bound);
         n += 1u;
     }
     t.n = n;
@@ -123,17 +197,22 @@ fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
 // `OverlapTest::overlaps`, each comparison decided in f32 where the tolerance allows.
 fn overlap_test_overlaps(t: ptr<function, OverlapTest>, x: u32, y: u32, z: u32) -> bool {
     let c32 = vec3<f32>(f32(x), f32(y), f32(z)) + vec3<f32>(0.5);
+    let cv = (c32 - (*t).v0_hi) - (*t).v0_lo;
+    let size = (*t).extent + l1(cv);
     for (var i = 0u; i < (*t).n; i++) {
         let a = (*t).axes32[i];
         let p = (*t).bounds32[i];
-        let ac = dot(a.xyz, c32);
-        let tol = OVERLAP_TOL * (abs(p.x) + abs(p.y) + a.w + dot(abs(a.xyz), c32)) + OVERLAP_TINY;
+        let ac = dot(a.xyz, cv);
+        let tol = OVERLAP_TOL * (p.z * size + a.w + abs(p.x) + abs(p.y) + abs(ac)) + OVERLAP_TINY;
         let below = p.x - ac;
         let above = p.y - ac;
         if below > a.w + tol || above < -a.w - tol {
             return false;
         }
         if below >= a.w - tol || above <= -a.w + tol {
+            if !(*t).has_f64 {
+                overlap_test_f64(t);
+            }
             let axis = (*t).axes[i];
             let ac64 = d3_dot(axis.a, d3_from_f32(c32));
             if f64_gt(f64_sub(axis.lo, ac64), axis.r) || f64_lt(f64_sub(axis.hi, ac64), f64_neg(axis.r)) {
@@ -144,21 +223,25 @@ fn overlap_test_overlaps(t: ptr<function, OverlapTest>, x: u32, y: u32, z: u32) 
     return true;
 }
 
-// The x of the centers of the cubes at (·, y, z), x ≤ x_max + 1, that may overlap the
-// triangle, as an interval (lo > hi: none): per axis, its condition solved for x with the
-// tolerance added, so that it holds wherever the f64 test's does.
-fn overlap_row_bounds(t: ptr<function, OverlapTest>, y: u32, z: u32, x_max: u32) -> vec2<f32> {
-    let cy = f32(y) + 0.5;
-    let cz = f32(z) + 0.5;
-    let cx = f32(x_max) + 1.0;
+// The x of the centers of the cubes at (·, y, z), x0 ≤ x ≤ x1, that may overlap the triangle,
+// as an interval (lo > hi: none): per axis, its condition solved for x with the tolerance added
+// (at its largest over the row), so that it holds wherever the f64 test's does.
+fn overlap_row_bounds(t: ptr<function, OverlapTest>, x0: u32, x1: u32, y: u32, z: u32) -> vec2<f32> {
+    let v0 = (*t).v0_hi;
+    let v0_lo = (*t).v0_lo;
+    let cvy = ((f32(y) + 0.5) - v0.y) - v0_lo.y;
+    let cvz = ((f32(z) + 0.5) - v0.z) - v0_lo.z;
+    let cvx = max(abs((f32(x0) + 0.5 - v0.x) - v0_lo.x), abs((f32(x1) + 0.5 - v0.x) - v0_lo.x)) + 1.0;
+    let size = (*t).extent + cvx + abs(cvy) + abs(cvz);
     var lo = -3.0e38;
     var hi = 3.0e38;
     for (var i = 0u; i < (*t).n; i++) {
         let a = (*t).axes32[i];
         let p = (*t).bounds32[i];
-        let rest = a.y * cy + a.z * cz;
-        let tol = OVERLAP_TOL * (abs(p.x) + abs(p.y) + a.w + abs(a.x) * cx + abs(a.y) * cy + abs(a.z) * cz) + OVERLAP_TINY;
-        // min − a·c ≤ r and max − a·c ≥ −r, with a·c = a.x·x + rest.
+        let rest = a.y * cvy + a.z * cvz;
+        let ac = abs(a.x) * cvx + abs(rest);
+        let tol = OVERLAP_TOL * (p.z * size + a.w + abs(p.x) + abs(p.y) + ac) + OVERLAP_TINY;
+        // min − a·cv ≤ r and max − a·cv ≥ −r, with a·cv = a.x·cvx + rest.
         let below = p.x - a.w - tol - rest;
         let above = p.y + a.w + tol - rest;
         if a.x == 0.0 {
@@ -172,8 +255,10 @@ fn overlap_row_bounds(t: ptr<function, OverlapTest>, y: u32, z: u32, x_max: u32)
         lo = max(lo, min(q0, q1));
         hi = min(hi, max(q0, q1));
     }
-    // The divisions' rounding.
-    return vec2<f32>(lo - 1e-3 - 1e-6 * abs(lo), hi + 1e-3 + 1e-6 * abs(hi));
+    // Back to grid x, widened for the divisions' and this sum's rounding.
+    let x_lo = (lo + v0.x) + v0_lo.x;
+    let x_hi = (hi + v0.x) + v0_lo.x;
+    return vec2<f32>(x_lo - 1e-3 - 1e-6 * abs(x_lo), x_hi + 1e-3 + 1e-6 * abs(x_hi));
 }
 
 // The cells of row (y, z) between x0 and x1 the triangle goes into: from its first overlapped
@@ -181,7 +266,7 @@ fn overlap_row_bounds(t: ptr<function, OverlapTest>, y: u32, z: u32, x_max: u32)
 // untested), as (first, last); first > last when it overlaps none.
 fn overlap_row_run(t: ptr<function, OverlapTest>, x0: u32, x1: u32, y: u32, z: u32) -> vec2<u32> {
     // Centers x + 0.5 within the bounds: x from ceil(lo − 0.5) to floor(hi − 0.5).
-    let b = overlap_row_bounds(t, y, z, x1);
+    let b = overlap_row_bounds(t, x0, x1, y, z);
     if !(b.x <= b.y) {
         return vec2<u32>(1u, 0u);
     }
