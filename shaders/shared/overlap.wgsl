@@ -31,10 +31,13 @@ struct OverlapAxis {
 }
 
 struct OverlapTest {
-    // The triangle's corners in grid space and the cubes' half size, from which the f64 axes
-    // are made when a comparison first needs them.
+    // The triangle's corners and edges in grid space and the cubes' half size, from which the
+    // f64 axes are made when a comparison first needs them, and which axis each entry is
+    // (`overlap_axis_vector`'s k: the f32 set-up decides which are skipped, for both).
     v: array<D3, 3>,
+    e: array<D3, 3>,
     h: F64,
+    ks: array<u32, 13>,
     has_f64: bool,
     // The box axes (the triangle's bounding box: the CPU tests it first), the nine edge ×
     // box-axis cross products that are not zero, then the normal. A box axis is the CPU's box
@@ -55,52 +58,42 @@ fn l1(v: vec3<f32>) -> f32 {
     return abs(v.x) + abs(v.y) + abs(v.z);
 }
 
-// Separating axis k of a triangle with edges `e`: for k < 3 box axis k; for k < 12 box axis
-// k % 3 crossed with edge k / 3 − 1 (glam's cross of a unit vector is the edge's components, one
-// negated, and zeros, up to the sign of zero, which no comparison sees); for k = 12 the normal
-// e0 × e1.
-fn overlap_axis_vector(e: ptr<function, array<D3, 3>>, k: u32) -> D3 {
-    let zero = F64(0u, 0u);
-    if k < 3u {
-        var a = D3(zero, zero, zero);
-        a[k] = f64_from_f32(1.0);
-        return a;
-    }
-    if k == 12u {
-        return d3_cross((*e)[0], (*e)[1]);
-    }
-    let d = (*e)[k / 3u - 1u];
-    switch k % 3u {
-        case 0u: {
-            return D3(zero, f64_neg(d[2]), d[1]);
-        }
-        case 1u: {
-            return D3(d[2], zero, f64_neg(d[0]));
-        }
-        default: {
-            return D3(f64_neg(d[1]), d[0], zero);
-        }
-    }
+// For an edge axis (3 ≤ k < 12, box axis k % 3 crossed with edge k / 3 − 1): the edge and the
+// two components (i, j) of the cross product that are not zero, a[i] = −d[j] and a[j] = d[i]
+// (glam's cross of a unit vector, up to the sign of zero, which no comparison sees).
+fn overlap_edge_axis(k: u32) -> vec3<u32> {
+    return vec3<u32>(k / 3u - 1u, (k + 1u) % 3u, (k + 2u) % 3u);
 }
 
-// The f64 axes (`OverlapTest::new` on the CPU), in the order and with the skips of the f32 ones.
+// Separating axis k of a triangle with edges `e`: for k < 3 box axis k; for k < 12 an edge axis
+// (`overlap_edge_axis`); for k = 12 the normal e0 × e1.
+fn overlap_axis_vector(e: ptr<function, array<D3, 3>>, k: u32) -> D3 {
+    let zero = F64(0u, 0u);
+    var a = D3(zero, zero, zero);
+    if k < 3u {
+        a[k] = f64_from_f32(1.0);
+    } else if k < 12u {
+        let x = overlap_edge_axis(k);
+        let d = (*e)[x.x];
+        a[x.y] = f64_neg(d[x.z]);
+        a[x.z] = d[x.y];
+    } else {
+        a = d3_cross((*e)[0], (*e)[1]);
+    }
+    return a;
+}
+
+// The f64 axes (`OverlapTest::new` on the CPU) of the entries the f32 set-up kept.
 fn overlap_test_f64(t: ptr<function, OverlapTest>) {
     var vs = (*t).v;
+    var e = (*t).e;
     let h = (*t).h;
-    var e: array<D3, 3>;
-    for (var i = 0u; i < 3u; i++) {
-        e[i] = d3_sub(vs[(i + 1u) % 3u], vs[i]);
-    }
-    var n = 0u;
-    for (var k = 0u; k < 13u; k++) {
+    for (var n = 0u; n < (*t).n; n++) {
+        let k = (*t).ks[n];
         let a = overlap_axis_vector(&e, k);
-        // A zero edge axis is skipped; the plane's interval is the single value n·v0 (a
-        // degenerate triangle's zero normal never separates).
-        if k >= 3u && k < 12u && d3_is_zero(a) {
-            continue;
-        }
         // A box axis' dot products are the corners' coordinates and its radius is h, exactly
-        // (products with 1 and 0, sums with zeros), so they are taken as such.
+        // (products with 1 and 0, sums with zeros), so they are taken as such; the plane's
+        // interval is the single value n·v0.
         let box_axis = k < 3u;
         var lo: F64;
         var hi: F64;
@@ -129,9 +122,7 @@ fn overlap_test_f64(t: ptr<function, OverlapTest>) {
             r = f64_mul(h, sum);
         }
         (*t).axes[n] = OverlapAxis(a, lo, hi, r);
-        n += 1u;
     }
-    (*t).n = n;
     (*t).has_f64 = true;
 }
 
@@ -143,11 +134,10 @@ fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
     t.h = h;
     t.has_f64 = false;
     var vs = v;
-    var e: array<D3, 3>;
     var e32: array<vec3<f32>, 3>;
     for (var i = 0u; i < 3u; i++) {
-        e[i] = d3_sub(vs[(i + 1u) % 3u], vs[i]);
-        e32[i] = d3_to_f32_approx(e[i]);
+        t.e[i] = d3_sub(vs[(i + 1u) % 3u], vs[i]);
+        e32[i] = d3_to_f32_approx(t.e[i]);
     }
     // The other corners' offsets from corner 0: e0 and −e2.
     let c1 = e32[0];
@@ -163,16 +153,14 @@ fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
         if k < 3u {
             a[k] = 1.0;
         } else if k < 12u {
-            // Box axis k % 3 × edge k / 3 − 1, skipped where the CPU's (f64) one is zero.
-            let d = e[k / 3u - 1u];
-            let d32 = e32[k / 3u - 1u];
-            let i = (k + 1u) % 3u;
-            let j = (k + 2u) % 3u;
-            if f64_is_zero(d[i]) && f64_is_zero(d[j]) {
+            // Skipped where the CPU's (f64) edge axis is zero.
+            let x = overlap_edge_axis(k);
+            let d = t.e[x.x];
+            if f64_is_zero(d[x.y]) && f64_is_zero(d[x.z]) {
                 continue;
             }
-            a[i] = -d32[j];
-            a[j] = d32[i];
+            a[x.y] = -e32[x.x][x.z];
+            a[x.z] = e32[x.x][x.y];
         } else {
             a = cross(e32[0], e32[1]);
             bound = l1(e32[0]) * l1(e32[1]);
@@ -185,6 +173,7 @@ fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
             lo = min(0.0, min(p1, p2));
             hi = max(0.0, max(p1, p2));
         }
+        t.ks[n] = k;
         t.axes32[n] = vec4<f32>(a, h32 * l1(a));
         t.bounds32[n] = vec3<f32>(lo, hi, l1(a) + bound);
         n += 1u;

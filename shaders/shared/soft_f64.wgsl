@@ -298,7 +298,3 @@ fn d3_cross(a: D3, b: D3) -> D3 {
     }
     return r;
 }
-
-fn d3_is_zero(a: D3) -> bool {
-    return f64_is_zero(a[0]) && f64_is_zero(a[1]) && f64_is_zero(a[2]);
-}

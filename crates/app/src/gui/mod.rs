@@ -334,22 +334,17 @@ impl GridrtApp {
                 let bounds = scene.loaded.bounds;
                 self.viewport.start_cpu(viewport::CpuRequest { opts, grid: b.built.grid.clone(), tris, bounds });
             } else {
-                self.viewport.cancel_cpu();
                 self.viewport.start(&opts);
             }
             #[cfg(target_arch = "wasm32")]
             self.viewport.start(&opts);
             self.last_key = Some(key);
         }
-        #[cfg(not(target_arch = "wasm32"))]
-        let stepped = if key.cpu_trace {
-            self.viewport.step_cpu(gpu)
-        } else {
-            self.viewport.step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds })
-        };
-        #[cfg(target_arch = "wasm32")]
-        let stepped = self.viewport.step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds });
-        match stepped.and_then(|done| gpu.ctx.check_device().map(|()| done)) {
+        match self
+            .viewport
+            .step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds })
+            .and_then(|done| gpu.ctx.check_device().map(|()| done))
+        {
             // A finished frame ends an earlier render error.
             Ok(true) => {
                 self.errors.clear(|k| *k == ErrorKind::Render);

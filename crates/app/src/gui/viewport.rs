@@ -224,6 +224,11 @@ impl Viewport {
     /// Asks for a frame. One in flight is abandoned after its current tile (the camera or a
     /// setting changed, so its remaining tiles would be stale) unless it is about to finish.
     pub fn start(&mut self, opts: &RenderOptions) {
+        // Natively, frames traced on the CPU are forgotten (one being traced finishes unseen).
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            self.cpu = CpuFrames::default();
+        }
         self.restart = Some(*opts);
     }
 
@@ -248,9 +253,20 @@ impl Viewport {
         self.shown = Some((t.width, t.height));
     }
 
-    /// Advances rendering: collects a finished tile, finishes the frame, starts a requested
-    /// one, submits the next tile. Returns true when a frame completed.
+    /// Advances rendering, on the GPU and (natively) on the CPU, whichever was asked for last:
+    /// true when a frame completed.
     pub fn step(&mut self, gpu: &Gpu, src: &FrameSource) -> Result<bool, GpuError> {
+        let on_gpu = self.step_gpu(gpu, src)?;
+        #[cfg(not(target_arch = "wasm32"))]
+        if self.step_cpu(gpu)? {
+            return Ok(true);
+        }
+        Ok(on_gpu)
+    }
+
+    /// Collects a finished tile, finishes the frame, starts a requested one, submits the next
+    /// tile. Returns true when a frame completed.
+    fn step_gpu(&mut self, gpu: &Gpu, src: &FrameSource) -> Result<bool, GpuError> {
         #[cfg(not(target_arch = "wasm32"))]
         let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
         let mut completed = false;
@@ -433,15 +449,9 @@ impl Viewport {
         self.cpu.next = Some(req);
     }
 
-    /// Forgets the CPU's frames (tracing went back to the GPU); one being traced finishes
-    /// unseen.
-    pub fn cancel_cpu(&mut self) {
-        self.cpu = CpuFrames::default();
-    }
-
     /// Shows a frame the CPU finished and starts the next one. Returns true when a frame
     /// completed.
-    pub fn step_cpu(&mut self, gpu: &Gpu) -> Result<bool, GpuError> {
+    fn step_cpu(&mut self, gpu: &Gpu) -> Result<bool, GpuError> {
         let mut completed = false;
         if let Some(job) = &mut self.cpu.job
             && let Some(result) = job.poll()
