@@ -7,6 +7,9 @@
 //! - `GRIDRT_FULL_MATRICES=1` (set by `.ci/run`): the exactness matrices trace their full ray
 //!   sets; without it they trace a fixed sample of each (every scene, structure, traversal,
 //!   insertion and mailbox setting still runs), so a newcomer's `cargo test` stays short.
+//! - `GRIDRT_THREE_DIR` (default `~/.cache/gridrt/three-0.170.0`): a folder holding
+//!   `node_modules/three`, the independent glTF posing reference; `GRIDRT_REQUIRE_THREE=1` (set by
+//!   `.ci/run`, which installs it) fails the posing comparison when it or `node` is missing.
 
 use std::path::{Path, PathBuf};
 
@@ -24,6 +27,28 @@ pub fn full_matrices() -> bool {
 /// 1000).
 pub fn matrix_rays(full: usize) -> usize {
     if full_matrices() { full } else { (full / 10).max(1000).min(full) }
+}
+
+/// The folder holding `node_modules/three` (three.js, the scene crate's independent posing
+/// reference), when it and `node` are there; `None` otherwise, which fails the calling test
+/// under `GRIDRT_REQUIRE_THREE=1`.
+pub fn three_js_dir() -> Option<PathBuf> {
+    let dir = std::env::var_os("GRIDRT_THREE_DIR").map(PathBuf::from).or_else(|| {
+        let cache = std::env::var_os("XDG_CACHE_HOME")
+            .map(PathBuf::from)
+            .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))?;
+        Some(cache.join("gridrt").join("three-0.170.0"))
+    });
+    let node = std::process::Command::new("node").arg("--version").output().is_ok_and(|o| o.status.success());
+    let found = dir.filter(|d| node && d.join("node_modules/three/package.json").is_file());
+    if found.is_none() {
+        assert!(
+            !flag("GRIDRT_REQUIRE_THREE"),
+            "GRIDRT_REQUIRE_THREE=1 but three.js or node is missing (GRIDRT_THREE_DIR, ~/.cache/gridrt/three-0.170.0)"
+        );
+        println!("three.js or node not installed: the check against three.js does not run");
+    }
+    found
 }
 
 /// The shared-scene folder, `../shared/scenes` beside the repository.
