@@ -36,15 +36,16 @@ for (const pair of pairs) {
   scene.updateMatrixWorld(true);
   const tris = [];
   const v = new THREE.Vector3();
-  scene.traverse((o) => {
-    if (!o.isMesh) return;
+  // One primitive's triangles, its vertices through `instance` (a node's EXT_mesh_gpu_instancing
+  // transform) and the mesh's world matrix.
+  const emit = (o, instance) => {
     const pos = o.geometry.attributes.position;
     const world = new Float32Array(pos.count * 3);
     for (let i = 0; i < pos.count; i++) {
       // Morph targets, then skinning (in the mesh's space), then the mesh's world matrix:
       // for a skinned mesh three.js keeps the skinned result in the mesh's space and the
       // product is the glTF rule's Σ w·joint·inverse bind (the mesh node's transform cancels).
-      o.getVertexPosition(i, v).applyMatrix4(o.matrixWorld);
+      o.getVertexPosition(i, v).applyMatrix4(instance).applyMatrix4(o.matrixWorld);
       world.set([v.x, v.y, v.z], 3 * i);
     }
     const index = o.geometry.index ? o.geometry.index.array : null;
@@ -55,7 +56,35 @@ for (const pair of pairs) {
         tris.push(world[3 * i], world[3 * i + 1], world[3 * i + 2]);
       }
     }
-  });
+  };
+  // An instanced node's primitives in gridrt's order: instance after instance, each instance
+  // all of the node's primitives (three.js keeps one InstancedMesh per primitive).
+  const emitInstanced = (prims) => {
+    const m = new THREE.Matrix4();
+    for (let q = 0; q < prims[0].count; q++) {
+      for (const o of prims) {
+        o.getMatrixAt(q, m);
+        emit(o, m);
+      }
+    }
+  };
+  const identity = new THREE.Matrix4();
+  const visit = (o) => {
+    let kids = o.children;
+    if (o.isInstancedMesh) {
+      emitInstanced([o]);
+    } else if (o.isMesh) {
+      emit(o, identity);
+    } else if (o.isGroup) {
+      // A node of several instanced primitives: a group whose first children they are.
+      let k = 0;
+      while (k < kids.length && kids[k].isInstancedMesh) k++;
+      if (k > 0) emitInstanced(kids.slice(0, k));
+      kids = kids.slice(k);
+    }
+    kids.forEach(visit);
+  };
+  visit(scene);
   mixer.stopAllAction();
   mixer.uncacheRoot(scene);
   chunks.push(Buffer.from(new Float32Array(tris).buffer));

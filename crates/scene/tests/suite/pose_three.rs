@@ -9,7 +9,7 @@
 //! transformed parents, non-uniform joint scale and an animated armature; morph targets with mesh
 //! and node default weights, a sparse target and LINEAR, STEP and CUBICSPLINE weights; quantized
 //! positions and morph deltas on a skin without inverse bind matrices whose joint is the mesh
-//! node's parent), and every shared animated scene.
+//! node's parent; instanced nodes under animated parents), and every shared animated scene.
 //!
 //! three.js is found by [`gridrt_testkit::three_js_dir`] (`npm install three@0.170.0 --prefix
 //! ~/.cache/gridrt/three-0.170.0`, with `node` on the PATH); `.ci/run` installs it and sets
@@ -316,6 +316,45 @@ fn quantized_doc() -> Doc {
     d
 }
 
+/// EXT_mesh_gpu_instancing under animation: a node of two primitives drawn three times
+/// (translation, rotation, scale per instance) under a moving, scaled parent, and a
+/// one-primitive instanced node with a child.
+fn instanced_doc() -> Doc {
+    let mut d = Doc::new();
+    d.json["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+    let (p, i) = sheet(2, 2, 1.0, 1.0);
+    let pa = d.positions(&p);
+    let lifted: Vec<[f32; 3]> = p.iter().map(|v| [v[0], v[1], v[2] + 1.0]).collect();
+    let pb = d.positions(&lifted);
+    let ia = d.indices_u32(&i);
+    let two = d.push(
+        "meshes",
+        json!({"primitives": [{"attributes": {"POSITION": pa}, "indices": ia}, {"attributes": {"POSITION": pb}, "indices": ia}]}),
+    );
+    let one = d.mesh(pa, Some(ia), 4);
+    let t = d.floats(&[0., 0., 0., 3., 0., 0., 0., 3., 0.], "VEC3", 3);
+    let r = d.floats(
+        &f32s(&[quat(DVec3::Z, 0.0), quat(DVec3::X, 0.5), quat(DVec3::new(0.0, 1.0, 1.0), 1.0)].concat()),
+        "VEC4",
+        4,
+    );
+    let sc = d.floats(&[1., 1., 1., 2., 1., 1., 0.5, 0.5, 2.], "VEC3", 3);
+    let attrs = json!({"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": t, "ROTATION": r, "SCALE": sc}}});
+    let leaf = d.node(json!({"mesh": one, "translation": [0, 0, -2]}));
+    let single = d.node(json!({"mesh": one, "children": [leaf], "translation": [-4, 0, 0],
+                               "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": t}}}}));
+    let node = d.node(json!({"mesh": two, "translation": [1, 0, 0], "extensions": attrs}));
+    let parent = d.node(json!({"children": [node, single], "scale": [1, 2, 1]}));
+    d.root(parent);
+    let mut c = new_clip("instances");
+    let rot = [quat(DVec3::Z, 0.0), quat(DVec3::Z, 1.5)].concat();
+    channel(&mut d, &mut c, node, "rotation", (&[0.0, 1.0], &rot), "LINEAR");
+    channel(&mut d, &mut c, parent, "translation", (&[0.0, 1.0], &[0., 0., 0., 0., 0., 4.]), "LINEAR");
+    channel(&mut d, &mut c, leaf, "scale", (&[0.0, 1.0], &[1., 1., 1., 3., 1., 1.]), "STEP");
+    d.json["animations"] = json!([c]);
+    d
+}
+
 /// Poses `file` with three.js at each (clip, seconds): the triangles' corners per pose.
 fn three_poses(three: &Path, file: &Path, times: &[(usize, f64)], work: &Path) -> Vec<Vec<[f32; 9]>> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/js/three_pose.mjs");
@@ -398,6 +437,7 @@ fn poses_agree_with_three_js_on_generated_and_shared_animated_files() {
         ("skin_float", skin_doc(5121, 5126)),
         ("morph", morph_doc()),
         ("quantized", quantized_doc()),
+        ("instanced", instanced_doc()),
     ];
     let mut files = Vec::new();
     for (name, d) in docs {
