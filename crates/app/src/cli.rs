@@ -57,9 +57,11 @@ pub struct AppArgs {
     /// Coherent 8×8 packets for primary and shadow rays (flat and macrocell grids), on or off.
     #[arg(long, value_enum)]
     pub packets: Option<Switch>,
-    /// Camera to start with: eye_x,eye_y,eye_z,target_x,target_y,target_z,fov (default: frame the scene).
-    #[arg(long, value_parser = parse_camera)]
-    pub camera: Option<gridrt_scene::Camera>,
+    /// Camera to start with: auto (frames the scene bounds, the default), framed (the model
+    /// fills the image), interior (a view along the scene from inside, for buildings) or
+    /// eye_x,eye_y,eye_z,target_x,target_y,target_z,fov.
+    #[arg(long, value_parser = CameraArg::parse, allow_hyphen_values = true)]
+    pub camera: Option<CameraArg>,
     /// Window size WIDTHxHEIGHT in logical pixels.
     #[arg(long, default_value = "1280x800", value_parser = parse_size)]
     pub window_size: (u32, u32),
@@ -456,8 +458,8 @@ pub struct RenderArgs {
     pub size: (u32, u32),
     /// Camera: auto (frames the scene bounds), framed (the model fills the image), interior (a
     /// view along the scene from inside, for buildings) or eye_x,eye_y,eye_z,target_x,target_y,target_z,fov.
-    #[arg(long, default_value = "auto", allow_hyphen_values = true)]
-    pub camera: String,
+    #[arg(long, default_value = "auto", value_parser = CameraArg::parse, allow_hyphen_values = true)]
+    pub camera: CameraArg,
     /// Count at the top of the heatmap colour scale (positive).
     #[arg(long, default_value_t = 64.0, value_parser = parse_heat_max)]
     pub heat_max: f32,
@@ -623,8 +625,34 @@ fn parse_memory_weight(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_camera(s: &str) -> Result<gridrt_scene::Camera, String> {
-    gridrt_scene::Camera::parse(s)
+/// A camera named on the command line (`--camera`): one of the benchmark's views of the scene
+/// ([`crate::lab::views`]) or given outright.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CameraArg {
+    /// Frames the scene bounds ([`gridrt_scene::Camera::fit`]).
+    Auto,
+    /// The model fills the image ([`crate::lab::views::framed_camera`]).
+    Framed,
+    /// Along the scene from inside ([`crate::lab::views::interior_camera`]).
+    Interior,
+    /// eye_x,eye_y,eye_z,target_x,target_y,target_z,fov.
+    At(gridrt_scene::Camera),
+}
+
+impl CameraArg {
+    pub fn parse(s: &str) -> Result<CameraArg, String> {
+        Ok(match s {
+            "auto" => CameraArg::Auto,
+            "framed" => CameraArg::Framed,
+            "interior" => CameraArg::Interior,
+            _ if !s.contains(',') => {
+                return Err(format!(
+                    "expected auto, framed, interior or eye_x,eye_y,eye_z,target_x,target_y,target_z,fov, got \"{s}\""
+                ));
+            }
+            _ => CameraArg::At(gridrt_scene::Camera::parse(s)?),
+        })
+    }
 }
 
 /// A count of at least 1.

@@ -8,7 +8,6 @@ mod commands;
 mod config;
 mod format;
 mod gui;
-#[cfg(not(target_arch = "wasm32"))]
 mod lab;
 mod limits;
 

@@ -334,12 +334,13 @@ fn hostile_files_and_sizes_end_in_one_line_errors() {
         (&["trace", "@default", "--rays", "/dev/zero", "-o", "/dev/null"], "not a regular file", 1),
         (&["gen", "sphereflake", "--size", "9", "-o", "/dev/null"], "out of range", 1),
         (&["gen", "particles", "--size", "0", "-o", "/dev/null"], "out of range", 1),
-        (&["render", "@default", "--camera", "1,2,3,1,2,3,45", "-o", "/dev/null"], "same point", 1),
-        (&["render", "@default", "--camera", "3e38,0,0,-3e38,0,0,45", "-o", "/dev/null"], "too far apart", 1),
+        (&["render", "@default", "--camera", "1,2,3,1,2,3,45", "-o", "/dev/null"], "same point", 2),
+        (&["render", "@default", "--camera", "3e38,0,0,-3e38,0,0,45", "-o", "/dev/null"], "too far apart", 2),
         (&["render", "@default", "--heat-max", "0", "-o", "/dev/null"], "positive", 2),
         (&["bench", "--rays", "0"], "at least 1", 2),
         (&["rays", "@default", "--kind", "random", "--count", "1000000000000", "-o", "/dev/null"], "memory", 2),
         (&["--view", "bogus"], "unknown view", 2),
+        (&["--camera", "sideways"], "expected auto, framed, interior", 2),
         (&["info", "@default", "--max-load-bytes", "12Q"], "unit", 2),
     ] {
         cases.push((words(args), needle, code));
@@ -655,6 +656,29 @@ fn app_screenshots_under_xvfb() {
             "{grid} {view} packets {packets}: {differ} of {} centre pixels differ on the CPU",
             gpu.len()
         );
+    }
+
+    // `--camera auto|framed|interior` (the Camera menu's views): the framed view fills the image
+    // with the model, so its centre is lit and differs from the bounds-framing view's.
+    let view_shot = |camera: &str| -> Vec<[u8; 3]> {
+        let png = out_dir.join(format!("app-camera-{camera}.png"));
+        let out = gridrt_cmd()
+            .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--render-scale", "0.5", "--camera", camera])
+            .env("DISPLAY", &x.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("running the app");
+        let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success() && log.contains("saved"), "app --camera {camera} failed:\n{log}");
+        centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
+    };
+    let auto = view_shot("auto");
+    for camera in ["framed", "interior"] {
+        let px = view_shot(camera);
+        let differ = px.iter().zip(&auto).filter(|(a, b)| a != b).count();
+        assert!(differ * 4 > px.len(), "--camera {camera}: only {differ} of {} centre pixels moved", px.len());
+        let bright = px.iter().filter(|p| p.iter().map(|&c| c as u32).sum::<u32>() > 200).count();
+        assert!(bright * 2 > px.len(), "--camera {camera}: only {bright} of {} centre pixels are lit", px.len());
     }
 
     // A 3840×2160 frame (more pixels than one storage binding holds): rendered in tiles.

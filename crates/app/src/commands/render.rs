@@ -6,7 +6,6 @@
 use anyhow::Context;
 use gridrt_gpu::{GpuSession, RenderOptions};
 use gridrt_grid::{AnyGrid, PacketStats};
-use gridrt_scene::Camera;
 use serde_json::json;
 
 use super::build_grid;
@@ -28,12 +27,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     );
     let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
     let aspect = width as f32 / height as f32;
-    let camera = match args.camera.as_str() {
-        "auto" => Camera::fit(&bounds, aspect),
-        "framed" => crate::lab::views::framed_camera(&tris, &bounds, &grid, aspect),
-        "interior" => crate::lab::views::interior_camera(&tris, &bounds, &grid),
-        s => Camera::parse(s).map_err(|e| anyhow::anyhow!("--camera: {e}"))?,
-    };
+    let camera = crate::lab::views::camera(args.camera, &tris, &bounds, &grid, aspect);
     let opts = RenderOptions {
         width,
         height,

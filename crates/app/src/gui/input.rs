@@ -10,6 +10,8 @@ use super::GridrtApp;
 use super::errors::ErrorKind;
 use super::jobs::SceneSource;
 use super::orbit::Orbit;
+use crate::cli::CameraArg;
+use crate::lab::views;
 
 impl GridrtApp {
     pub(super) fn menu(&mut self, ui: &mut egui::Ui) {
@@ -55,9 +57,31 @@ impl GridrtApp {
                 ui.checkbox(&mut self.settings.show_cost_plot, "Cost model");
                 ui.checkbox(&mut self.settings.show_explainer, "Traversal explainer");
             });
-            if ui.button("Reset camera").clicked() {
-                self.reset_camera();
-            }
+            ui.menu_button("Camera", |ui| {
+                if ui
+                    .button("Frame the bounds (F)")
+                    .on_hover_text("--camera auto: the whole scene box in view")
+                    .clicked()
+                {
+                    self.reset_camera();
+                    ui.close();
+                }
+                let built = self.built.is_some();
+                let framed = ui
+                    .add_enabled(built, egui::Button::new("Fill with the model"))
+                    .on_hover_text("The benchmark's framed view: aimed and narrowed until 75% of a probe image hits");
+                if framed.clicked() {
+                    self.view_camera(CameraArg::Framed);
+                    ui.close();
+                }
+                let interior = ui.add_enabled(built, egui::Button::new("Inside, along the scene")).on_hover_text(
+                    "The benchmark's interior view of architectural scenes: from inside, down the longer axis",
+                );
+                if interior.clicked() {
+                    self.view_camera(CameraArg::Interior);
+                    ui.close();
+                }
+            });
             ui.label("drag: orbit · right/shift-drag: pan · wheel: zoom · F: reset · drop a .glb to open");
         });
     }
@@ -67,6 +91,16 @@ impl GridrtApp {
             let aspect = self.last_key.map_or(1.5, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
             self.orbit = Orbit::fit(&s.loaded.bounds, aspect);
         }
+    }
+
+    /// Points the camera as `--camera` would (the framed and interior views as `gridrt bench`
+    /// aims them, probing the structure on screen with the triangles it was built over).
+    pub(super) fn view_camera(&mut self, arg: CameraArg) {
+        let (Some(s), Some(b)) = (&self.scene, &self.built) else { return };
+        let tris = b.built.pose.as_ref().map_or(&s.loaded.tris, |p| &p.tris);
+        let aspect = self.last_key.map_or(1.5, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
+        let cam = views::camera(arg, tris, &s.loaded.bounds, &b.built.grid, aspect);
+        self.orbit = Orbit::from_camera(&cam, &s.loaded.bounds);
     }
 
     #[cfg(not(target_arch = "wasm32"))]

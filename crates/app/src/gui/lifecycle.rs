@@ -12,6 +12,7 @@ use super::errors::ErrorKind;
 use super::jobs::{self, Job, LoadedScene, SceneSource};
 use super::orbit::Orbit;
 use super::timeline::Timeline;
+use crate::cli::CameraArg;
 use crate::gui::built::{Built, BuiltOn};
 
 #[derive(Debug)]
@@ -153,10 +154,13 @@ impl GridrtApp {
         };
         self.scene_generation += 1;
         let aspect = self.last_key.map_or(1.0, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
-        self.orbit = match self.initial_camera.take() {
-            Some(cam) => Orbit::from_camera(&cam, &loaded.bounds),
-            None => Orbit::fit(&loaded.bounds, aspect),
+        self.orbit = match self.initial_camera {
+            Some(CameraArg::At(cam)) => Orbit::from_camera(&cam, &loaded.bounds),
+            _ => Orbit::fit(&loaded.bounds, aspect),
         };
+        if matches!(self.initial_camera, Some(CameraArg::At(_) | CameraArg::Auto)) {
+            self.initial_camera = None;
+        }
         self.timeline = self.start_timeline(&loaded);
         self.ready = None;
         self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
@@ -243,5 +247,9 @@ impl GridrtApp {
         self.built_counter += 1;
         let upload_ms = started.elapsed().as_secs_f64() * 1e3;
         self.built = Some(BuiltState { built, gpu, posed_gpu, upload_ms, id: self.built_counter });
+        // `--camera framed|interior`: aimed with the first structure.
+        if let Some(view) = self.initial_camera.take() {
+            self.view_camera(view);
+        }
     }
 }

@@ -31,7 +31,7 @@ use gridrt_gpu::{FrameSource, RenderOptions, View};
 use gridrt_scene::Camera;
 use web_time::Instant;
 
-use crate::cli::AppArgs;
+use crate::cli::{AppArgs, CameraArg};
 use built::Built;
 use errors::{ErrorKind, Errors};
 use hook::Hook;
@@ -77,8 +77,9 @@ pub struct GridrtApp {
     errors: Errors,
     measurement: cost_plot::Measurement,
     measure_job: Option<Job<Result<Built, String>>>,
-    /// `--camera`: used for the first scene instead of framing it.
-    initial_camera: Option<Camera>,
+    /// `--camera`: used for the first scene instead of framing its bounds (a framed or interior
+    /// view once its first structure is built: they probe it).
+    initial_camera: Option<CameraArg>,
     /// When the camera last moved, and the resolution factor used while it moves.
     last_interaction: Option<Instant>,
     interactive_factor: f32,

@@ -14,6 +14,7 @@ use super::hook::{CapturedFrame, Hook, HookCommand, HookStats};
 use super::jobs::SceneSource;
 use super::orbit::Orbit;
 use super::{GridrtApp, SmokeStatus};
+use crate::cli::CameraArg;
 
 /// `--screenshot out.png --frames N`: render N frames, save the window, exit.
 #[derive(Debug)]
@@ -122,7 +123,7 @@ impl GridrtApp {
                 HookCommand::Traversal(t) => self.settings.traversal = t,
                 HookCommand::Camera(cam) => match &self.scene {
                     Some(s) => self.orbit = Orbit::from_camera(&cam, &s.loaded.bounds),
-                    None => self.initial_camera = Some(cam),
+                    None => self.initial_camera = Some(CameraArg::At(cam)),
                 },
                 HookCommand::FrameSize(size) => self.frame_size = size,
                 HookCommand::Open { name, bytes } => self.open(ctx, SceneSource::Bytes { name, bytes }),

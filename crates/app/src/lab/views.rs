@@ -4,19 +4,27 @@
 //! mostly time misses; the framed camera is aimed and narrowed until most of its rays hit.
 
 use glam::Vec3;
+use gridrt_grid::AnyGrid;
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{AnyGrid, GridConfig, structure};
-use gridrt_scene::rays::{image_rays, image_size, random_rays};
+#[cfg(not(target_arch = "wasm32"))]
+use gridrt_grid::{GridConfig, structure};
+use gridrt_scene::rays::image_rays;
+#[cfg(not(target_arch = "wasm32"))]
+use gridrt_scene::rays::{image_size, random_rays};
 use gridrt_scene::{Aabb, Camera, Hit, Ray};
+#[cfg(not(target_arch = "wasm32"))]
 use serde::Serialize;
 
+#[cfg(not(target_arch = "wasm32"))]
 use super::scenes::LabScene;
+use crate::cli::CameraArg;
 
 /// The share of a framed camera's probe rays that must hit (the full-size image gets about the
 /// same share; the issue asks for at least 0.7).
 pub const FRAMED_HIT_SHARE: f64 = 0.75;
 
 /// Which rays a set holds.
+#[cfg(not(target_arch = "wasm32"))]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RaySet {
@@ -28,6 +36,7 @@ pub enum RaySet {
     Random,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 impl RaySet {
     pub fn name(self) -> &'static str {
         match self {
@@ -40,6 +49,7 @@ impl RaySet {
 
 /// One ray set of a scene: its rays, and the width of their image when they are one (the camera
 /// sets, row-major, so packets can tile them).
+#[cfg(not(target_arch = "wasm32"))]
 pub struct RayBatch {
     pub set: RaySet,
     pub rays: Vec<Ray>,
@@ -49,6 +59,7 @@ pub struct RayBatch {
 /// The ray sets of `sc`, about `count` rays each: framed and interior (architectural scenes only)
 /// as whole 4:3 images, and random rays. `probe` is a structure over `sc.tris` the framing
 /// traces its probe images with.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn ray_sets(sc: &LabScene, probe: &AnyGrid, count: usize) -> Vec<RayBatch> {
     let (w, h) = image_size(count, 4.0 / 3.0);
     let image = |set, cam: &Camera| RayBatch { set, rays: image_rays(cam, w, h), width: Some(w as usize) };
@@ -62,6 +73,7 @@ pub fn ray_sets(sc: &LabScene, probe: &AnyGrid, count: usize) -> Vec<RayBatch> {
 }
 
 /// The flat grid the framing probes with.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn probe_grid(tris: &[[Vec3; 3]]) -> anyhow::Result<AnyGrid> {
     Ok(structure::build(tris, &GridConfig::default())?.0)
 }
@@ -115,6 +127,17 @@ pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect:
             Camera { target: cam.eye + dir * dist, vfov_deg: (2.0 * new_half_v.atan()).to_degrees().max(0.05), ..cam };
     }
     cam
+}
+
+/// The camera `arg` names for images of `aspect` (width / height) of `tris`, probing `probe` (a
+/// structure over them) for the framed and interior views.
+pub fn camera(arg: CameraArg, tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect: f32) -> Camera {
+    match arg {
+        CameraArg::Auto => Camera::fit(bounds, aspect),
+        CameraArg::Framed => framed_camera(tris, bounds, probe, aspect),
+        CameraArg::Interior => interior_camera(tris, bounds, probe),
+        CameraArg::At(cam) => cam,
+    }
 }
 
 /// A view along an architectural scene from inside, looking down its longer horizontal axis
