@@ -1,5 +1,7 @@
-// Shadow rays from each primary hit towards the point light (t in [eps, 1)); a miss marks a
-// lit point. Pixels without a hit get an empty ray (tmin > tmax), which the trace kernels skip.
+// Shadow rays from the point light to each primary hit, stopping just short of it (t in
+// [0, 1 - eps]); a miss marks a lit point. They all start at the light, so a tile's rays share
+// their origin (tight packets) and an occluder near the light ends them early. Pixels without a
+// hit get an empty ray (tmin > tmax), which the trace kernels skip.
 // CPU port: crates/gpu/src/cpu.rs (`shadow_ray`).
 //!include shared/render_bindings.wgsl
 
@@ -20,8 +22,8 @@ fn shadow_rays_from_hits(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = hit_point(primary[i], h.t);
-    // Offset along the ray to the light, relative to the scene size, to leave the surface.
-    let to_light = shade.light - p;
-    let eps = 1e-4 * shade.diagonal / max(length(to_light), 1e-20);
-    shadow_rays[i] = Ray(vec4<f32>(p, eps), vec4<f32>(to_light, 1.0));
+    // Stops short of the surface by a distance relative to the scene size.
+    let from_light = p - shade.light;
+    let eps = 1e-4 * shade.diagonal / max(length(from_light), 1e-20);
+    shadow_rays[i] = Ray(vec4<f32>(shade.light, 0.0), vec4<f32>(from_light, 1.0 - eps));
 }

@@ -55,17 +55,17 @@ pub fn present_totals(hits: &[gridrt_scene::Hit], stats: &[gridrt_grid::RayStats
     }
 }
 
-/// shaders/shadow.wgsl `shadow_rays_from_hits` for one pixel: the ray from the hit towards the
-/// light, or an empty ray (tmin > tmax) for a miss.
+/// shaders/shadow.wgsl `shadow_rays_from_hits` for one pixel: the ray from the light to just
+/// before the hit, or an empty ray (tmin > tmax) for a miss.
 pub fn shadow_ray(shade: &crate::layout::ShadeParams, primary: &Ray, hit: &gridrt_scene::Hit) -> Ray {
     if !hit.is_hit() {
         return Ray::new(Vec3::ZERO, Vec3::X, 1.0, 0.0);
     }
     let p = primary.at(hit.t);
     let light = Vec3::from(shade.light);
-    let to_light = light - p;
-    let eps = 1e-4 * shade.diagonal / to_light.length().max(1e-20);
-    Ray::new(p, to_light, eps, 1.0)
+    let from_light = p - light;
+    let eps = 1e-4 * shade.diagonal / from_light.length().max(1e-20);
+    Ray::new(light, from_light, 0.0, 1.0 - eps)
 }
 
 fn pack_rgba(c: Vec3) -> u32 {

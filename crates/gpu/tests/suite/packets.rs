@@ -70,7 +70,7 @@ fn packet_kernels_equal_single_ray_kernels_bit_for_bit() {
                     if !mailbox {
                         continue;
                     }
-                    // Shadow rays from the hits to the light (common end, scattered origins).
+                    // Shadow rays from the light to the hits, as the renderer makes them (a common origin).
                     let shade = shade_params(&b, &opts);
                     let shadow: Vec<_> = rays.iter().zip(&single).map(|(r, h)| shadow_ray(&shade, r, h)).collect();
                     let (s1, _) = gpu.trace(&gs, &shadow, TraceOptions::MAILBOX).unwrap();

@@ -1,6 +1,6 @@
 //! Coherent grid traversal: packets give the hits of single rays and of brute force, bit for
 //! bit, for camera images (outside and inside the scene, any tile size, widths that are not a
-//! multiple of it), shadow rays towards a point light and incoherent rays; packets really walk
+//! multiple of it), shadow rays from and towards a point light and incoherent rays; packets really walk
 //! slice by slice where the rays are coherent.
 
 use glam::Vec3;
@@ -13,9 +13,10 @@ use gridrt_scene::{Aabb, Camera, Hit, Ray};
 
 use super::common::*;
 
-/// Shadow rays from each hit towards `light` (an empty ray for a miss), as the renderer makes
-/// them.
-pub fn shadow_rays(primary: &[Ray], hits: &[Hit], light: Vec3, diagonal: f32) -> Vec<Ray> {
+/// Shadow rays between each hit and `light` (an empty ray for a miss): from the light to just
+/// before the hit, as the renderer makes them (a common origin), or with `towards_light` from
+/// just after the hit to the light (a common end).
+pub fn shadow_rays(primary: &[Ray], hits: &[Hit], light: Vec3, diagonal: f32, towards_light: bool) -> Vec<Ray> {
     primary
         .iter()
         .zip(hits)
@@ -24,8 +25,8 @@ pub fn shadow_rays(primary: &[Ray], hits: &[Hit], light: Vec3, diagonal: f32) ->
                 return Ray::new(Vec3::ZERO, Vec3::X, 1.0, 0.0);
             }
             let p = r.at(h.t);
-            let to = light - p;
-            Ray::new(p, to, 1e-4 * diagonal / to.length().max(1e-20), 1.0)
+            let eps = 1e-4 * diagonal / (p - light).length().max(1e-20);
+            if towards_light { Ray::new(p, light - p, eps, 1.0) } else { Ray::new(light, p - light, 0.0, 1.0 - eps) }
         })
         .collect()
 }
@@ -118,7 +119,12 @@ fn check_scene_images(name: &str, tris: &[[Vec3; 3]], width: u32, height: u32) {
         // The auto view's tiles are narrow: they walk as packets. Wide tiles of a small image
         // close up may all be judged too incoherent (single rays), which is right too.
         assert!(k > 0 || coherent > 0, "{name} camera {k}: no packet walked slice by slice");
-        let shadow = shadow_rays(&rays, &expected, light, b.diagonal());
+        // Closest hits of shadow rays both ways: from the light and towards it.
+        let towards = shadow_rays(&rays, &expected, light, b.diagonal(), true);
+        let (towards_expected, _) = reference(tris, &towards);
+        let what = format!("{name} camera {k} shadows towards the light");
+        check_packets(&what, tris, &grids, &towards, width as usize, &towards_expected);
+        let shadow = shadow_rays(&rays, &expected, light, b.diagonal(), false);
         let (shadow_expected, sst) = reference(tris, &shadow);
         let sc = check_packets(
             &format!("{name} camera {k} shadows"),

@@ -234,7 +234,7 @@ fn hostile_scenes_in_packets_equal_brute_force() {
                     assert_same_occlusion(&format!("{name} {kind} packets {tile} any"), &tris, &rays, &expected, &hits);
                     // Shadow packets: from the hits towards a light outside the box.
                     let light = b.max + b.extent() * 0.7;
-                    let shadows = shadow_rays(&rays, &expected, light, b.diagonal());
+                    let shadows = shadow_rays(&rays, &expected, light, b.diagonal(), false);
                     let (want, _) = reference(&tris, &shadows);
                     let (hits, _, _) = grid.trace_packets(&tris, &shadows, w as usize, any, packets, true);
                     assert_same_occlusion(
