@@ -540,6 +540,20 @@ struct Xvfb {
 }
 
 impl Xvfb {
+    /// Runs the app with `args` on this display: whether it succeeded, and its stdout and stderr.
+    fn app(&self, args: &[&str]) -> (bool, String) {
+        let out = gridrt_cmd()
+            .args(args)
+            .env("DISPLAY", &self.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("running the app");
+        (
+            out.status.success(),
+            format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr)),
+        )
+    }
+
     fn start() -> Xvfb {
         for n in 90..200 {
             if Path::new(&format!("/tmp/.X{n}-lock")).exists() || Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
@@ -662,14 +676,9 @@ fn app_screenshots_under_xvfb() {
     // with the model, so its centre is lit and differs from the bounds-framing view's.
     let view_shot = |camera: &str| -> Vec<[u8; 3]> {
         let png = out_dir.join(format!("app-camera-{camera}.png"));
-        let out = gridrt_cmd()
-            .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--render-scale", "0.5", "--camera", camera])
-            .env("DISPLAY", &x.display)
-            .env_remove("WAYLAND_DISPLAY")
-            .output()
-            .expect("running the app");
-        let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-        assert!(out.status.success() && log.contains("saved"), "app --camera {camera} failed:\n{log}");
+        let (ok, log) =
+            x.app(&[s(&scene), "--screenshot", s(&png), "--frames", "2", "--render-scale", "0.5", "--camera", camera]);
+        assert!(ok && log.contains("saved"), "app --camera {camera} failed:\n{log}");
         centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
     };
     let auto = view_shot("auto");
@@ -683,14 +692,8 @@ fn app_screenshots_under_xvfb() {
 
     // A 3840×2160 frame (more pixels than one storage binding holds): rendered in tiles.
     let png = out_dir.join("app-3840x2160.png");
-    let out = gridrt_cmd()
-        .args(["--screenshot", s(&png), "--frames", "1", "--frame-size", "3840x2160"])
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("running the app");
-    let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success() && log.contains("last frame 3840x2160"), "a 3840x2160 frame:\n{log}");
+    let (ok, log) = x.app(&["--screenshot", s(&png), "--frames", "1", "--frame-size", "3840x2160"]);
+    assert!(ok && log.contains("last frame 3840x2160"), "a 3840x2160 frame:\n{log}");
 
     // The cost-model window's measurement: a flat grid timed at every sampled resolution.
     let png = out_dir.join("app-cost-model.png");

@@ -1,7 +1,6 @@
 //! What benchmarks and experiments share: their scenes, timed measurements (sweeps, best-of
-//! timing, the machine's description) and reports (tables, CSV/JSON rows, charts).
-
-//! In the browser only [`views`] is built (the app aims its camera with it).
+//! timing, the machine's description) and reports (tables, CSV/JSON rows, charts). In the
+//! browser only [`views`] is built (the app aims its camera with it).
 
 #[cfg(not(target_arch = "wasm32"))]
 pub mod animation;

@@ -1,7 +1,7 @@
 //! Coherent grid traversal: packets give the hits of single rays and of brute force, bit for
 //! bit, for camera images (outside and inside the scene, any tile size, widths that are not a
-//! multiple of it), shadow rays from and towards a point light and incoherent rays; packets really walk
-//! slice by slice where the rays are coherent.
+//! multiple of it), shadow rays from and towards a point light and incoherent rays; packets
+//! really walk slice by slice where the rays are coherent.
 
 use glam::Vec3;
 use gridrt_grid::coherent::PacketOptions;
