@@ -676,9 +676,9 @@ fn app_screenshots_under_xvfb() {
     // with the model, so its centre is lit and differs from the bounds-framing view's.
     let view_shot = |camera: &str| -> Vec<[u8; 3]> {
         let png = out_dir.join(format!("app-camera-{camera}.png"));
-        let (ok, log) =
+        let (succeeded, log) =
             x.app(&[s(&scene), "--screenshot", s(&png), "--frames", "2", "--render-scale", "0.5", "--camera", camera]);
-        assert!(ok && log.contains("saved"), "app --camera {camera} failed:\n{log}");
+        assert!(succeeded && log.contains("saved"), "app --camera {camera} failed:\n{log}");
         centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
     };
     let auto = view_shot("auto");
@@ -692,8 +692,8 @@ fn app_screenshots_under_xvfb() {
 
     // A 3840×2160 frame (more pixels than one storage binding holds): rendered in tiles.
     let png = out_dir.join("app-3840x2160.png");
-    let (ok, log) = x.app(&["--screenshot", s(&png), "--frames", "1", "--frame-size", "3840x2160"]);
-    assert!(ok && log.contains("last frame 3840x2160"), "a 3840x2160 frame:\n{log}");
+    let (succeeded, log) = x.app(&["--screenshot", s(&png), "--frames", "1", "--frame-size", "3840x2160"]);
+    assert!(succeeded && log.contains("last frame 3840x2160"), "a 3840x2160 frame:\n{log}");
 
     // The cost-model window's measurement: a flat grid timed at every sampled resolution.
     let png = out_dir.join("app-cost-model.png");
