@@ -33,13 +33,14 @@ fn quat(axis: DVec3, angle: f64) -> [f64; 4] {
     DQuat::from_axis_angle(axis.normalize(), angle).to_array()
 }
 
-/// A sampler over `times` and `values` (of `ty`, `n` floats each) driving `path` of `node`.
+/// A sampler over `keys` (times, then values: per key one value of `path`'s type, or with
+/// CUBICSPLINE its in-tangent, value and out-tangent) driving `path` of `node`.
 fn channel(d: &mut Doc, anim: &mut serde_json::Value, node: usize, path: &str, keys: (&[f64], &[f64]), interp: &str) {
     let (times, values) = keys;
     let n = values.len() / times.len() / if interp == "CUBICSPLINE" { 3 } else { 1 };
-    let ty = match (path, n) {
-        ("rotation", _) => "VEC4",
-        ("weights", _) => "SCALAR",
+    let ty = match path {
+        "rotation" => "VEC4",
+        "weights" => "SCALAR",
         _ => "VEC3",
     };
     let input = d.floats(&f32s(times), "SCALAR", 1);
