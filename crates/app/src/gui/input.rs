@@ -88,9 +88,13 @@ impl GridrtApp {
 
     pub(super) fn reset_camera(&mut self) {
         if let Some(s) = &self.scene {
-            let aspect = self.last_key.map_or(1.5, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
-            self.orbit = Orbit::fit(&s.loaded.bounds, aspect);
+            self.orbit = Orbit::fit(&s.loaded.bounds, self.frame_aspect());
         }
+    }
+
+    /// Width over height of the last frame asked for (1.5 before the first).
+    fn frame_aspect(&self) -> f32 {
+        self.last_key.map_or(1.5, |k| k.size[0] as f32 / k.size[1].max(1) as f32)
     }
 
     /// Points the camera as `--camera` would (the framed and interior views as `gridrt bench`
@@ -98,8 +102,7 @@ impl GridrtApp {
     pub(super) fn view_camera(&mut self, arg: CameraArg) {
         let (Some(s), Some(b)) = (&self.scene, &self.built) else { return };
         let tris = b.built.pose.as_ref().map_or(&s.loaded.tris, |p| &p.tris);
-        let aspect = self.last_key.map_or(1.5, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
-        let cam = views::camera(arg, tris, &s.loaded.bounds, &b.built.grid, aspect);
+        let cam = views::camera(arg, tris, &s.loaded.bounds, &b.built.grid, self.frame_aspect());
         self.orbit = Orbit::from_camera(&cam, &s.loaded.bounds);
     }
 

@@ -158,9 +158,8 @@ impl GridrtApp {
             Some(CameraArg::At(cam)) => Orbit::from_camera(&cam, &loaded.bounds),
             _ => Orbit::fit(&loaded.bounds, aspect),
         };
-        if matches!(self.initial_camera, Some(CameraArg::At(_) | CameraArg::Auto)) {
-            self.initial_camera = None;
-        }
+        // A framed or interior view waits for the first structure (it probes it).
+        self.initial_camera = self.initial_camera.filter(|c| matches!(c, CameraArg::Framed | CameraArg::Interior));
         self.timeline = self.start_timeline(&loaded);
         self.ready = None;
         self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });

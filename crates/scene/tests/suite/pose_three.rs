@@ -74,9 +74,9 @@ fn sheet(nx: u32, ny: u32, w: f32, h: f32) -> (Vec<[f32; 3]>, Vec<u32>) {
     (p, i)
 }
 
-/// Deterministic values in [-1, 1).
+/// Deterministic values in [-1, 1), one per `k` (the scene crate's SplitMix64).
 fn noise(k: u32) -> f64 {
-    (k.wrapping_mul(2654435761).rotate_left(13) >> 8) as f64 / (1u32 << 23) as f64 - 1.0
+    gridrt_scene::rng::Rng::new(k as u64).range(-1.0, 1.0) as f64
 }
 
 fn tangents(k: u32, n: usize, scale: f64) -> Vec<f64> {
