@@ -33,6 +33,10 @@ for (const pair of pairs) {
   action.clampWhenFinished = true;
   action.play();
   mixer.setTime(seconds);
+  // Rotations are unit quaternions (glTF); three.js leaves a key's value as stored, which for
+  // normalized-integer rotations is off unit by the quantization, and builds a scaled matrix from
+  // it. Normalized here, as gridrt normalizes every rotation it interpolates.
+  scene.traverse((o) => o.quaternion.normalize());
   scene.updateMatrixWorld(true);
   const tris = [];
   const v = new THREE.Vector3();

@@ -356,6 +356,280 @@ fn instanced_doc() -> Doc {
     d
 }
 
+/// A random animated scene from `seed`: a forest of 3 to 9 nodes with TRS transforms (uniform,
+/// non-uniform and sometimes mirroring scales) or static `matrix` ones; on some nodes a mesh of
+/// one or two primitives, rigid, with morph targets, skinned, or skinned with morph targets;
+/// skins over 1 to 4 other nodes (any: ancestors, descendants, unrelated) with inverse bind
+/// matrices of the rest pose, arbitrary ones or none, u8/u16 joints and float or normalized
+/// integer weights; one or two clips whose channels pick node, path, interpolation and 1 to 5
+/// keys at random, starting anywhere in the first second, rotations and weights sometimes
+/// stored as normalized integers. No mesh is shared (three.js cannot
+/// load a mesh used both skinned and unskinned), no `matrix` node is animated (glTF) and no
+/// weights channel targets a node with a morphed mesh below it (three.js drives those too).
+fn random_doc(seed: u64) -> Doc {
+    let mut r = gridrt_scene::rng::Rng::new(seed);
+    let mut d = Doc::new();
+    d.json["skins"] = json!([]);
+    let range = |r: &mut gridrt_scene::rng::Rng, lo: f64, hi: f64| r.range(lo as f32, hi as f32) as f64;
+    let unit_quat = |r: &mut gridrt_scene::rng::Rng| {
+        let axis = r.unit_vector().as_dvec3();
+        quat(axis, r.range(-3.1, 3.1) as f64)
+    };
+    let n = 3 + r.below(7) as usize;
+    let parent: Vec<Option<usize>> =
+        (0..n).map(|k| if k == 0 || r.f32() < 0.3 { None } else { Some(r.below(k as u64) as usize) }).collect();
+    let is_matrix: Vec<bool> = (0..n).map(|_| r.f32() < 0.2).collect();
+    // Rest transforms (f64, as the file stores them in f32).
+    let mut local = Vec::new();
+    for &m in &is_matrix {
+        let t = DVec3::new(range(&mut r, -2.0, 2.0), range(&mut r, -2.0, 2.0), range(&mut r, -2.0, 2.0));
+        let q = unit_quat(&mut r);
+        let mut s = if r.f32() < 0.5 {
+            DVec3::splat(range(&mut r, 0.5, 2.0))
+        } else {
+            DVec3::new(range(&mut r, 0.5, 2.0), range(&mut r, 0.5, 2.0), range(&mut r, 0.5, 2.0))
+        };
+        if !m && r.f32() < 0.15 {
+            s.x = -s.x;
+        }
+        let round = |v: &[f64]| v.iter().map(|&x| x as f32 as f64).collect::<Vec<_>>();
+        let (t, q, s) = (round(&t.to_array()), round(&q), round(&s.to_array()));
+        local.push((DVec3::from_slice(&t), DQuat::from_slice(&q), DVec3::from_slice(&s)));
+    }
+    let trs = |(t, q, s): (DVec3, DQuat, DVec3)| DMat4::from_scale_rotation_translation(s, q, t);
+    let world = |k: usize| {
+        let mut m = trs(local[k]);
+        let mut p = parent[k];
+        while let Some(j) = p {
+            m = trs(local[j]) * m;
+            p = parent[j];
+        }
+        m
+    };
+    let mut nodes: Vec<serde_json::Value> = (0..n)
+        .map(|k| {
+            let (t, q, s) = local[k];
+            if is_matrix[k] {
+                json!({"matrix": f32s(&trs(local[k]).to_cols_array())})
+            } else {
+                json!({"translation": f32s(&t.to_array()), "rotation": f32s(&q.to_array()), "scale": f32s(&s.to_array())})
+            }
+        })
+        .collect();
+    // Meshes: (node, morph target count).
+    let mut morphed = Vec::new();
+    // A mesh loop indexes `nodes` (skins, weights) while it pushes to `d`.
+    #[allow(clippy::needless_range_loop)]
+    for k in 0..n {
+        if !(k == 0 || r.f32() < 0.6) {
+            continue;
+        }
+        let (nx, ny) = (1 + r.below(4) as u32, 1 + r.below(4) as u32);
+        let (p, i) = sheet(nx, ny, range(&mut r, 0.3, 2.0) as f32, range(&mut r, 0.3, 2.0) as f32);
+        let pa = d.positions(&p);
+        let ia = d.indices_u32(&i);
+        let kind = r.below(4); // rigid, morph, skinned, skinned + morph
+        let targets = if kind % 2 == 1 { 1 + r.below(3) as usize } else { 0 };
+        let mut prim = json!({"attributes": {"POSITION": pa}, "indices": ia});
+        if targets > 0 {
+            let t: Vec<_> = (0..targets)
+                .map(|_| {
+                    let deltas: Vec<f32> = (0..3 * p.len()).map(|_| r.range(-0.3, 0.3)).collect();
+                    json!({"POSITION": d.floats(&deltas, "VEC3", 3)})
+                })
+                .collect();
+            prim["targets"] = json!(t);
+        }
+        if kind >= 2 {
+            let others: Vec<usize> = (0..n).filter(|&j| j != k).collect();
+            let count = 1 + r.below(4.min(others.len()) as u64) as usize;
+            let joints: Vec<usize> = (0..count).map(|_| others[r.below(others.len() as u64) as usize]).collect();
+            let mut ids: Vec<u16> = Vec::new();
+            let mut w: Vec<[f64; 4]> = Vec::new();
+            for _ in &p {
+                let mut wv = [0.0f64; 4];
+                for (c, x) in wv.iter_mut().enumerate() {
+                    ids.push(r.below(count as u64) as u16);
+                    *x = if c > 0 && r.f32() < 0.3 { 0.0 } else { range(&mut r, 0.05, 1.0) };
+                }
+                let sum: f64 = wv.iter().sum();
+                w.push(wv.map(|x| x / sum));
+            }
+            let ja = if r.f32() < 0.5 {
+                d.accessor(&ids.iter().map(|&j| j as u8).collect::<Vec<_>>(), 5121, p.len(), "VEC4")
+            } else {
+                d.accessor(&ids.iter().flat_map(|j| j.to_le_bytes()).collect::<Vec<_>>(), 5123, p.len(), "VEC4")
+            };
+            let wa = match r.below(3) {
+                0 => d.floats(&f32s(&w.concat()), "VEC4", 4),
+                q => {
+                    let max = if q == 1 { 255.0 } else { 65535.0 };
+                    let mut bytes = Vec::new();
+                    for wv in &w {
+                        let mut v = wv.map(|x| (x * max).round());
+                        v[0] += max - v.iter().sum::<f64>();
+                        for x in v {
+                            if q == 1 {
+                                bytes.push(x as u8);
+                            } else {
+                                bytes.extend((x as u16).to_le_bytes());
+                            }
+                        }
+                    }
+                    let a = d.accessor(&bytes, if q == 1 { 5121 } else { 5123 }, p.len(), "VEC4");
+                    d.json["accessors"][a]["normalized"] = json!(true);
+                    a
+                }
+            };
+            prim["attributes"]["JOINTS_0"] = json!(ja);
+            prim["attributes"]["WEIGHTS_0"] = json!(wa);
+            let mut skin = json!({"joints": joints});
+            match r.below(3) {
+                0 => {}
+                b => {
+                    let m: Vec<f64> = joints
+                        .iter()
+                        .flat_map(|&j| {
+                            let at = if b == 1 { world(j) } else { trs(local[(j + 1) % n]) };
+                            at.inverse().to_cols_array()
+                        })
+                        .collect();
+                    skin["inverseBindMatrices"] = json!(d.floats(&f32s(&m), "MAT4", 16));
+                }
+            }
+            nodes[k]["skin"] = json!(d.push("skins", skin));
+        }
+        let mut mesh = json!({"primitives": [prim]});
+        if kind == 0 && r.f32() < 0.3 {
+            // A second, non-indexed primitive (rigid meshes: a skinned mesh's primitives all
+            // need joints and weights).
+            let loose: Vec<[f32; 3]> = i.iter().map(|&v| [p[v as usize][0], p[v as usize][1] + 0.1, 0.3]).collect();
+            let pb = d.positions(&loose);
+            mesh["primitives"].as_array_mut().unwrap().push(json!({"attributes": {"POSITION": pb}}));
+        }
+        if targets > 0 {
+            if r.f32() < 0.5 {
+                mesh["weights"] = json!((0..targets).map(|_| r.range(-0.5, 1.5)).collect::<Vec<_>>());
+            }
+            if r.f32() < 0.3 {
+                nodes[k]["weights"] = json!((0..targets).map(|_| r.range(-0.5, 1.5)).collect::<Vec<_>>());
+            }
+            morphed.push((k, targets));
+        }
+        nodes[k]["mesh"] = json!(d.push("meshes", mesh));
+    }
+    for (k, node) in nodes.iter_mut().enumerate() {
+        let kids: Vec<usize> = (0..n).filter(|&j| parent[j] == Some(k)).collect();
+        if !kids.is_empty() {
+            node["children"] = json!(kids);
+        }
+    }
+    d.json["nodes"] = json!(nodes);
+    (0..n).filter(|&k| parent[k].is_none()).for_each(|k| d.root(k));
+    let mut clips = Vec::new();
+    for c in 0..1 + r.below(2) {
+        let mut a = new_clip(&format!("clip{c}"));
+        let mut targets: Vec<(usize, &str, usize)> = (0..n)
+            .filter(|&k| !is_matrix[k])
+            .flat_map(|k| [(k, "translation", 3), (k, "rotation", 4), (k, "scale", 3)])
+            .collect();
+        // three.js (r170) applies a node's weights channel to every morphed mesh below the node
+        // too (its loader traverses the node for a multi-primitive group); glTF drives the
+        // node's own mesh only. So weights are animated only on nodes with no morphed mesh below.
+        let below = |k: usize, j: usize| {
+            let mut p = parent[j];
+            while let Some(q) = p {
+                if q == k {
+                    return true;
+                }
+                p = parent[q];
+            }
+            false
+        };
+        targets.extend(
+            morphed
+                .iter()
+                .filter(|&&(k, _)| !morphed.iter().any(|&(j, _)| below(k, j)))
+                .map(|&(k, t)| (k, "weights", t)),
+        );
+        for _ in 0..1 + r.below(5) {
+            if targets.is_empty() {
+                break;
+            }
+            let (node, path, width) = targets.swap_remove(r.below(targets.len() as u64) as usize);
+            let interp = ["LINEAR", "STEP", "CUBICSPLINE"][r.below(3) as usize];
+            // CUBICSPLINE needs two keys at least (glTF).
+            let keys = if interp == "CUBICSPLINE" { 2 + r.below(4) as usize } else { 1 + r.below(5) as usize };
+            let mut times = vec![range(&mut r, 0.0, 1.0)];
+            while times.len() < keys {
+                let last = times[times.len() - 1];
+                times.push(last + range(&mut r, 0.1, 0.7));
+            }
+            let value = |r: &mut gridrt_scene::rng::Rng| -> Vec<f64> {
+                match path {
+                    "rotation" => {
+                        let mut q = unit_quat(r);
+                        if r.f32() < 0.3 {
+                            q.iter_mut().for_each(|x| *x = -*x);
+                        }
+                        q.to_vec()
+                    }
+                    "scale" => (0..3).map(|_| range(r, 0.3, 2.0)).collect(),
+                    "translation" => (0..3).map(|_| range(r, -2.0, 2.0)).collect(),
+                    _ => (0..width).map(|_| range(r, -0.5, 1.5)).collect(),
+                }
+            };
+            let mut values = Vec::new();
+            for _ in 0..keys {
+                if interp == "CUBICSPLINE" {
+                    values.extend((0..width).map(|_| range(&mut r, -1.0, 1.0)));
+                    values.extend(value(&mut r));
+                    values.extend((0..width).map(|_| range(&mut r, -1.0, 1.0)));
+                } else {
+                    values.extend(value(&mut r));
+                }
+            }
+            channel(&mut d, &mut a, node, path, (&times, &values), interp);
+            // Rotations and weights may be stored as normalized integers (glTF core): i16 or i8
+            // rotations, i16 or u8 weights (values and tangents in their range).
+            let quantize = match path {
+                "rotation" => [None, None, Some(5122), Some(5120)][r.below(4) as usize],
+                "weights" => [None, Some(5122), Some(5121)][r.below(3) as usize],
+                _ => None,
+            };
+            if let Some(ty) = quantize {
+                let (max, lo) = match ty {
+                    5120 => (127.0, -1.0),
+                    5121 => (255.0, 0.0),
+                    _ => (32767.0, -1.0),
+                };
+                let bytes: Vec<u8> = values
+                    .iter()
+                    .flat_map(|&v| {
+                        let q = (v.clamp(lo, 1.0) * max).round();
+                        match ty {
+                            5120 => vec![q as i8 as u8],
+                            5121 => vec![q as u8],
+                            _ => (q as i16).to_le_bytes().to_vec(),
+                        }
+                    })
+                    .collect();
+                let (ty_name, count) =
+                    if path == "rotation" { ("VEC4", values.len() / 4) } else { ("SCALAR", values.len()) };
+                // VEC4 of i8 is 4 bytes, of i16 8: aligned as vertex data needs no stride here.
+                let out = d.accessor(&bytes, ty, count, ty_name);
+                d.json["accessors"][out]["normalized"] = json!(true);
+                let samplers = a["samplers"].as_array_mut().unwrap();
+                let k = samplers.len() - 1;
+                samplers[k]["output"] = json!(out);
+            }
+        }
+        clips.push(a);
+    }
+    d.json["animations"] = json!(clips);
+    d
+}
+
 /// Poses `file` with three.js at each (clip, seconds): the triangles' corners per pose.
 fn three_poses(three: &Path, file: &Path, times: &[(usize, f64)], work: &Path) -> Vec<Vec<[f32; 9]>> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/js/three_pose.mjs");
@@ -427,6 +701,10 @@ fn compare(three: &Path, file: &Path, work: &Path) -> usize {
     times.len()
 }
 
+/// Random scenes posed by both (each a Node process: about 0.3 s); `GRIDRT_RANDOM_POSES=N`
+/// tries N instead.
+const RANDOM_DOCS: u64 = 24;
+
 #[test]
 fn poses_agree_with_three_js_on_generated_and_shared_animated_files() {
     let Some(three) = gridrt_testkit::three_js_dir() else { return };
@@ -444,6 +722,13 @@ fn poses_agree_with_three_js_on_generated_and_shared_animated_files() {
     for (name, d) in docs {
         let f = work.join(format!("{name}.glb"));
         std::fs::write(&f, d.glb()).unwrap();
+        files.push(f);
+    }
+    // Random scenes: what no hand-made file thought of (a failing one stays in `work`).
+    let count = std::env::var("GRIDRT_RANDOM_POSES").ok().and_then(|v| v.parse().ok()).unwrap_or(RANDOM_DOCS);
+    for seed in 0..count {
+        let f = work.join(format!("random_{seed}.glb"));
+        std::fs::write(&f, random_doc(seed).glb()).unwrap();
         files.push(f);
     }
     files.extend(gridrt_testkit::shared_scenes_in(&["animated"], &["glb"]));
