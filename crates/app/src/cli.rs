@@ -427,11 +427,32 @@ pub struct TraceArgs {
     /// (same hits).
     #[arg(long)]
     pub no_interleave: bool,
+    /// closest: each ray's closest hit (t, then triangle index; the same bits on every
+    /// structure and backend). any: occlusion (shadow rays): a ray's search ends at the first hit
+    /// found, so whether it hits is defined (and equals the closest query's), not which hit.
+    #[arg(long, value_enum, default_value = "closest")]
+    pub query: QueryArg,
     #[arg(long, value_enum, default_value = "cpu")]
     pub backend: Backend,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `trace --query`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum QueryArg {
+    Closest,
+    Any,
+}
+
+impl From<QueryArg> for gridrt_grid::Query {
+    fn from(q: QueryArg) -> gridrt_grid::Query {
+        match q {
+            QueryArg::Closest => gridrt_grid::Query::Closest,
+            QueryArg::Any => gridrt_grid::Query::Any,
+        }
+    }
 }
 
 fn parse_traversal(s: &str) -> Result<Traversal, String> {

@@ -112,7 +112,33 @@ fn pipeline_gen_info_build_rays_trace() {
                 );
             }
         }
+        // Occlusion queries: the same rays hit, each at a real hit no closer than the closest.
+        for grid in ["flat", "macrocell", "multires", "twolevel", "proximity"] {
+            let hits = tmp(&format!("{kind}-{grid}-any.hits"));
+            let args = ["trace", s(&scene), "--rays", s(&rays), "-o", s(&hits), "--grid", grid, "--query", "any"];
+            let out = ok(&args);
+            assert!(out.contains("any hit"), "{out}");
+            assert_any_hits(&std::fs::read(&hits).unwrap(), &want, &format!("{kind} {grid}"));
+        }
     }
+}
+
+/// `any` (a hits file of `--query any`) against `closest` (brute force's closest hits): the same
+/// rays hit, and each any-hit's t is no less than the closest hit's.
+fn assert_any_hits(any: &[u8], closest: &[u8], what: &str) {
+    assert_eq!(any.len(), closest.len(), "{what}: one hit per ray");
+    let field = |h: &[u8], k: usize| [h[4 * k], h[4 * k + 1], h[4 * k + 2], h[4 * k + 3]];
+    let mut differ = 0;
+    for (a, c) in any.chunks(16).zip(closest.chunks(16)) {
+        let (ta, tc) = (f32::from_le_bytes(field(a, 0)), f32::from_le_bytes(field(c, 0)));
+        let (ia, ic) = (u32::from_le_bytes(field(a, 1)), u32::from_le_bytes(field(c, 1)));
+        if (ia == u32::MAX) != (ic == u32::MAX) {
+            panic!("{what}: an any-hit query and the closest hit disagree on whether a ray hits");
+        }
+        assert!(ia == u32::MAX || ta >= tc, "{what}: an any hit at t {ta} before the closest hit's {tc}");
+        differ += (ia != ic) as usize;
+    }
+    eprintln!("{what}: {differ} of {} any hits are not the closest", any.len() / 16);
 }
 
 /// The dynamic path on a generated animated scene: info lists the clip, --animation/--time pose
@@ -494,6 +520,14 @@ fn gpu_trace_and_render() {
         assert_eq!(a.len(), b.len());
         let same = a.chunks(16).zip(b.chunks(16)).filter(|(x, y)| x[4..8] == y[4..8]).count();
         assert!(same >= a.len() / 16 - 2, "{grid}: only {same} of {} rays hit the same triangle", a.len() / 16);
+    }
+    let brute = tmp("gpu-brute.hits");
+    ok(&["trace", s(&scene), "--rays", s(&rays), "-o", s(&brute), "--backend", "brute"]);
+    for grid in ["flat", "macrocell", "proximity"] {
+        let any = tmp(&format!("gpu-{grid}-any.hits"));
+        let args = ["trace", s(&scene), "--rays", s(&rays), "-o", s(&any), "--backend", "gpu", "--grid", grid];
+        ok(&[&args[..], &["--query", "any"]].concat());
+        assert_any_hits(&std::fs::read(&any).unwrap(), &std::fs::read(&brute).unwrap(), &format!("GPU {grid}"));
     }
     let png = tmp("render.png");
     let out = ok(&[

@@ -1,4 +1,5 @@
-//! `gridrt trace SCENE --rays R -o HITS`: closest hits, rays/s and mean per-ray stats.
+//! `gridrt trace SCENE --rays R -o HITS`: closest hits (or any hits, `--query any`), rays/s and
+//! mean per-ray stats.
 
 use std::time::Instant;
 
@@ -9,7 +10,7 @@ use gridrt_scene::rays::{read_rays, write_hits};
 use serde_json::json;
 
 use super::build_grid;
-use crate::cli::{Backend, TraceArgs};
+use crate::cli::{Backend, QueryArg, TraceArgs};
 
 pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
@@ -22,10 +23,11 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         traversal: args.traversal,
         mailbox: args.mailbox,
         interleave: !args.no_interleave,
-        ..Default::default()
+        query: args.query.into(),
     };
     let (label, build_ms, memory, hits, stats, secs) = match args.backend {
         Backend::Brute => {
+            // The closest hit is also a valid answer to an occlusion query.
             let start = Instant::now();
             let brute = brute::BruteForce::new(&tris);
             let (hits, stats) = trace_batch(&rays, true, |r| brute.trace(r));
@@ -92,7 +94,7 @@ fn print_summary(args: &TraceArgs, m: &Summary, s: &BatchStats) -> anyhow::Resul
         let out = json!({
             "scene": scene, "structure": label, "rays": s.rays, "hits": s.hits,
             "build_ms": build_ms, "memory_bytes": memory, "trace_s": secs, "rays_per_s": rays_per_s,
-            "threads": rayon::current_num_threads(),
+            "threads": rayon::current_num_threads(), "query": format!("{:?}", args.query).to_lowercase(),
             "mean_cells_per_ray": s.mean_cells(), "mean_tests_per_ray": s.mean_tests(),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
@@ -101,6 +103,9 @@ fn print_summary(args: &TraceArgs, m: &Summary, s: &BatchStats) -> anyhow::Resul
     println!("scene:      {scene}");
     println!("structure:  {label} (build {build_ms:.1} ms, {})", super::human_bytes(memory));
     println!("rays:       {} ({} hits, {:.1}%)", s.rays, s.hits, 100.0 * s.hits as f64 / s.rays.max(1) as f64);
+    if args.query == QueryArg::Any {
+        println!("query:      any hit (occlusion: whether each ray hits, not which hit)");
+    }
     println!("time:       {:.3} s, {:.3} Mrays/s on {} threads", secs, rays_per_s / 1e6, rayon::current_num_threads());
     println!("per ray:    {:.2} cells visited, {:.2} triangle tests", s.mean_cells(), s.mean_tests());
     println!("hits file:  {}", args.output.display());
