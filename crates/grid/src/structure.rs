@@ -199,7 +199,8 @@ impl AnyGrid {
     /// Closest hits (or any hits, by `opts.query`) of an image's rays (`rays` row-major, `width` per row) in packets of
     /// coherent rays ([`crate::coherent`]): the flat grid, the macrocell grid (empty macrocells
     /// skipped per slice) and the proximity grid's cells walk slice by slice; the hierarchies
-    /// trace single rays (no packets). Hits are those of [`AnyGrid::trace_batch`], bit for bit.
+    /// walk their top grid's slices and their child grids' cells layer by layer inside them.
+    /// Hits are those of [`AnyGrid::trace_batch`], bit for bit.
     pub fn trace_packets(
         &self,
         tris: &[[Vec3; 3]],
@@ -216,16 +217,10 @@ impl AnyGrid {
                 coherent::trace_image(&p.grid, tris, rays, width, packets, opts.query, parallel, single)
             }
             AnyGrid::Macrocell(g) => coherent::trace_image(g, tris, rays, width, packets, opts.query, parallel, single),
-            AnyGrid::Multires(_) | AnyGrid::TwoLevel(_) => {
-                let (hits, stats) = self.trace_batch(tris, rays, opts, parallel);
-                (hits, stats, PacketStats::default())
+            AnyGrid::Multires(h) | AnyGrid::TwoLevel(h) => {
+                coherent::trace_image(h, tris, rays, width, packets, opts.query, parallel, single)
             }
         }
-    }
-
-    /// Whether [`AnyGrid::trace_packets`] walks packets for this kind (else single rays).
-    pub fn has_packets(&self) -> bool {
-        !matches!(self, AnyGrid::Multires(_) | AnyGrid::TwoLevel(_))
     }
 
     /// A 64-bit FNV-1a hash of the structure's arrays: the cell table (a flat grid's table of

@@ -59,8 +59,8 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         let cpu_s = best(&mut || {
             hits = grid.trace_batch(&tris, rays, opts, true).1.hits;
         });
-        // Packets only where the rays are an image (and the kind walks packets).
-        let packet_s = (*is_image && grid.has_packets()).then(|| {
+        // Packets only where the rays are an image.
+        let packet_s = is_image.then(|| {
             best(&mut || {
                 grid.trace_packets(&tris, rays, width as usize, opts, packets, true);
             })

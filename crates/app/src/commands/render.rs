@@ -71,7 +71,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         Device::Cpu => {
             anyhow::ensure!(
-                !(args.view.is_heatmap() && opts.packets && grid.has_packets()),
+                !(args.view.is_heatmap() && opts.packets),
                 "the heatmap views need per-ray counts, which packets do not keep: add --packets off"
             );
             let primary = primary.as_deref().expect("the CPU's rays");

@@ -216,7 +216,7 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
     ui.small("Naive Bresenham misses cells: see the traversal explainer.");
     ui.checkbox(&mut s.mailbox, "mailboxing");
     ui.checkbox(&mut s.packets, "coherent packets (8×8)")
-        .on_hover_text("Primary and shadow rays traced in 8×8 packets that walk the grid slice by slice (flat and macrocell grids; the others trace single rays)");
+        .on_hover_text("Primary and shadow rays traced in 8×8 packets that walk the grid slice by slice (on the GPU: flat and macrocell grids, the others single rays; on the CPU: every grid, a hierarchy's child grids layer by layer)");
     #[cfg(not(target_arch = "wasm32"))]
     ui.checkbox(&mut s.cpu_trace, "trace on the CPU").on_hover_text(
         "Frames traced by the render kernels' CPU ports on every core (`--cpu-trace`): faster than \

@@ -135,6 +135,9 @@ pub struct SliceRect {
     pub hi: UVec3,
     /// Per axis, the lowest and highest grid coordinate of the region.
     pub span: [(f64, f64); 3],
+    /// The walk axis, the reference plane and the lines' bounds, for the region of a thinner
+    /// slab ([`SliceRect::span_between`]).
+    frustum: (usize, f64, Bounds),
 }
 
 /// A triangle's bounding box in grid space, computed as insertion computes it and widened by
@@ -157,6 +160,26 @@ impl TriangleBox {
 }
 
 impl SliceRect {
+    /// The axis the packet walks along.
+    #[inline]
+    pub fn walk_axis(&self) -> usize {
+        self.frustum.0
+    }
+
+    /// The region the rays cross between planes `s0` and `s1` of the walk axis (grid
+    /// coordinates, within the slice): [`SliceWalk::rect`]'s bounds at those planes, so a
+    /// hierarchy's child grid is visited layer by layer, each layer only where the rays are.
+    #[inline]
+    pub fn span_between(&self, s0: f64, s1: f64) -> [(f64, f64); 3] {
+        let (a, s_ref, b) = self.frustum;
+        let mut span = self.span;
+        span[a] = (s0.min(s1), s0.max(s1));
+        for (n, u) in [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate() {
+            span[u] = line_span(&b, n, s_ref, s0, s1);
+        }
+        span
+    }
+
     /// Whether no active ray can meet the triangle of box `b` inside this slice: the box misses
     /// the region. Such a triangle is left for the slices where its box meets the rays (it is in
     /// their cells too), and is not mailboxed here.
@@ -164,6 +187,21 @@ impl SliceRect {
     pub fn misses(&self, b: &TriangleBox) -> bool {
         (0..3).any(|k| b.hi[k] < self.span[k].0 || b.lo[k] > self.span[k].1)
     }
+}
+
+/// On the `n`-th axis other than the walk axis, the lowest and highest coordinates the lines of
+/// `b` (intercepts at plane `s_ref`) take between planes `near` and `far`, widened by
+/// [`SLICE_MARGIN_CELLS`]: a line is linear in the plane, so its extremes are at the two planes.
+#[inline]
+fn line_span(b: &Bounds, n: usize, s_ref: f64, near: f64, far: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for s in [near, far] {
+        let ds = s - s_ref;
+        let (sl, sh) = if ds >= 0.0 { (b.slope_lo[n], b.slope_hi[n]) } else { (b.slope_hi[n], b.slope_lo[n]) };
+        lo = lo.min(b.c_lo[n] + sl * ds);
+        hi = hi.max(b.c_hi[n] + sh * ds);
+    }
+    (lo - SLICE_MARGIN_CELLS, hi + SLICE_MARGIN_CELLS)
 }
 
 /// The coordinates on one axis that lines with intercepts in `c` (at the reference plane) and
@@ -385,7 +423,6 @@ impl SliceWalk {
         let a = self.axis;
         let (near, far) = self.planes(j);
         let b = &self.bounds;
-        let m = SLICE_MARGIN_CELLS;
         let mut l = UVec3::ZERO;
         let mut h = UVec3::ZERO;
         let mut span = [(0.0, 0.0); 3];
@@ -393,14 +430,7 @@ impl SliceWalk {
         (l[a], h[a]) = (k, k);
         span[a] = (k as f64, k as f64 + 1.0);
         for (n, u) in [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate() {
-            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            for s in [near, far] {
-                let ds = s - self.s_ref;
-                let (sl, sh) = if ds >= 0.0 { (b.slope_lo[n], b.slope_hi[n]) } else { (b.slope_hi[n], b.slope_lo[n]) };
-                lo = lo.min(b.c_lo[n] + sl * ds);
-                hi = hi.max(b.c_hi[n] + sh * ds);
-            }
-            let (lo, hi) = (lo - m, hi + m);
+            let (lo, hi) = line_span(b, n, self.s_ref, near, far);
             let r = res[u] as f64;
             if hi < 0.0 || lo >= r || lo.is_nan() || hi.is_nan() {
                 return None;
@@ -410,7 +440,7 @@ impl SliceWalk {
             h[u] = (hi.max(0.0) as u32).min(res[u] - 1);
             span[u] = (lo, hi);
         }
-        Some(SliceRect { lo: l, hi: h, span })
+        Some(SliceRect { lo: l, hi: h, span, frustum: (a, self.s_ref, *b) })
     }
 
     /// A step no later than the first at which [`SliceWalk::ends_ray`] is true for `lane` with

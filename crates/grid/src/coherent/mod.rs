@@ -35,6 +35,7 @@ use serde::Serialize;
 
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
+use crate::hierarchy::{Cell, Hierarchy};
 use crate::macrocell::MacrocellGrid;
 use crate::mailbox::Mailbox;
 use crate::stats::{BatchStats, RayStats};
@@ -53,12 +54,13 @@ pub const PACKET_MAILBOX_SIZE: usize = 256;
 /// README's packet levers (coherent grid traversal) have the measurements behind the value.
 pub const COHERENCE_RATIO: f64 = 0.2;
 
-/// A grid a packet can walk slice by slice: its geometry and the occupied cells of a box.
+/// A grid a packet can walk slice by slice: its geometry and the occupied cells of a slice.
 pub trait SliceCells {
     fn geom(&self) -> &GridGeometry;
-    /// Calls `f` with the references of every occupied cell in the box `lo..=hi` (cell indices,
-    /// within the grid).
-    fn for_each_occupied(&self, lo: UVec3, hi: UVec3, f: &mut impl FnMut(&[u32]));
+    /// Calls `f` with the references of every occupied cell of `rect`'s box of cells
+    /// (`lo..=hi`, within the grid); a hierarchy's with those of every occupied leaf below it
+    /// that the rays' region (`span`) reaches.
+    fn for_each_occupied(&self, rect: &frustum::SliceRect, f: &mut impl FnMut(&[u32]));
 }
 
 impl SliceCells for FlatGrid {
@@ -67,7 +69,15 @@ impl SliceCells for FlatGrid {
     }
 
     #[inline]
-    fn for_each_occupied(&self, lo: UVec3, hi: UVec3, f: &mut impl FnMut(&[u32])) {
+    fn for_each_occupied(&self, rect: &frustum::SliceRect, f: &mut impl FnMut(&[u32])) {
+        self.for_each_occupied_in(rect.lo, rect.hi, f);
+    }
+}
+
+impl FlatGrid {
+    /// [`SliceCells::for_each_occupied`] over the box of cells `lo..=hi`.
+    #[inline]
+    fn for_each_occupied_in(&self, lo: UVec3, hi: UVec3, f: &mut impl FnMut(&[u32])) {
         let res = self.geom.res;
         for z in lo.z..=hi.z {
             for y in lo.y..=hi.y {
@@ -90,8 +100,8 @@ impl SliceCells for MacrocellGrid {
 
     /// Empty macrocells of the box are skipped whole (one bit each).
     #[inline]
-    fn for_each_occupied(&self, lo: UVec3, hi: UVec3, f: &mut impl FnMut(&[u32])) {
-        let a = self.a;
+    fn for_each_occupied(&self, rect: &frustum::SliceRect, f: &mut impl FnMut(&[u32])) {
+        let (lo, hi, a) = (rect.lo, rect.hi, self.a);
         let (mlo, mhi) = (lo / a, hi / a);
         for mz in mlo.z..=mhi.z {
             for my in mlo.y..=mhi.y {
@@ -102,7 +112,87 @@ impl SliceCells for MacrocellGrid {
                     }
                     let blo = (m * a).max(lo);
                     let bhi = (m * a + UVec3::splat(a - 1)).min(hi);
-                    self.fine.for_each_occupied(blo, bhi, f);
+                    self.fine.for_each_occupied_in(blo, bhi, f);
+                }
+            }
+        }
+    }
+}
+
+impl SliceCells for Hierarchy {
+    fn geom(&self) -> &GridGeometry {
+        &self.geom
+    }
+
+    /// Ize et al.'s hierarchical CGT, flattened: the packet walks the top grid's slices, and in
+    /// a top cell that is a child grid it visits the child's cells the rays' region reaches
+    /// (widened by the child's insertion margin), descending likewise to any depth.
+    fn for_each_occupied(&self, rect: &frustum::SliceRect, f: &mut impl FnMut(&[u32])) {
+        let top = &self.nodes[0];
+        for z in rect.lo.z..=rect.hi.z {
+            for y in rect.lo.y..=rect.hi.y {
+                for x in rect.lo.x..=rect.hi.x {
+                    let c = UVec3::new(x, y, z);
+                    let i = top.first_cell as usize + crate::geometry::linear_index(c, top.res);
+                    self.visit_region(i, c.as_dvec3().to_array(), [1.0; 3], rect, &rect.span, f);
+                }
+            }
+        }
+    }
+}
+
+impl Hierarchy {
+    /// Cell `i`, whose box in top-grid coordinates starts at `base` and is `size` wide: its
+    /// references if a non-empty leaf; if a child grid, those of its cells the rays' region
+    /// reaches, layer by layer along the walk axis (each layer's region from `rect`'s frustum,
+    /// within `span`), widened by the child's insertion margin, recursively.
+    fn visit_region(
+        &self,
+        i: usize,
+        base: [f64; 3],
+        size: [f64; 3],
+        rect: &frustum::SliceRect,
+        span: &[(f64, f64); 3],
+        f: &mut impl FnMut(&[u32]),
+    ) {
+        let a = match self.cell(i) {
+            Cell::Leaf(r) if r.is_empty() => return,
+            Cell::Leaf(r) => return f(&self.refs[r]),
+            Cell::Child(a) => a,
+        };
+        let node = &self.nodes[a as usize];
+        let margin = node.margin as f64;
+        let cell: [f64; 3] = std::array::from_fn(|k| size[k] / node.res[k] as f64);
+        // The child's cells within `span` on `axes` (widened by the margin), None if none.
+        let range = |span: &[(f64, f64); 3], k: usize| -> Option<(u32, u32)> {
+            let n = node.res[k];
+            let l = (span[k].0 - base[k]) / cell[k] - margin;
+            let h = (span[k].1 - base[k]) / cell[k] + margin;
+            if h < 0.0 || l >= n as f64 || l.is_nan() || h.is_nan() {
+                return None;
+            }
+            Some(((l.max(0.0) as u32).min(n - 1), (h.max(0.0) as u32).min(n - 1)))
+        };
+        let w = rect.walk_axis();
+        let [u, v] = [(w + 1) % 3, (w + 2) % 3];
+        let Some((wl, wh)) = range(span, w) else { return };
+        for layer in wl..=wh {
+            // The rays' region in this layer (its planes widened by the margin), within `span`.
+            let s0 = base[w] + (layer as f64 - margin) * cell[w];
+            let s1 = base[w] + (layer as f64 + 1.0 + margin) * cell[w];
+            let mut sub = rect.span_between(s0, s1);
+            for k in [u, v] {
+                sub[k] = (sub[k].0.max(span[k].0), sub[k].1.min(span[k].1));
+            }
+            sub[w] = span[w];
+            let (Some((ul, uh)), Some((vl, vh))) = (range(&sub, u), range(&sub, v)) else { continue };
+            for cv in vl..=vh {
+                for cu in ul..=uh {
+                    let mut c = UVec3::ZERO;
+                    (c[w], c[u], c[v]) = (layer, cu, cv);
+                    let j = node.first_cell as usize + crate::geometry::linear_index(c, node.res);
+                    let b = [0, 1, 2].map(|k| base[k] + c[k] as f64 * cell[k]);
+                    self.visit_region(j, b, cell, rect, &sub, f);
                 }
             }
         }
@@ -253,7 +343,7 @@ impl Packet {
                 (&mut self.best, &mut self.mailbox, &mut self.rays, &mut self.cull_stats);
             let mut changed = false;
             let geom = grid.geom();
-            grid.for_each_occupied(lo, hi, &mut |refs| {
+            grid.for_each_occupied(&rect, &mut |refs| {
                 for &tri in refs {
                     // Tested already, or out of the rays' reach in this slice (then left for
                     // later slices: not mailboxed).

@@ -5,8 +5,9 @@
 
 use glam::Vec3;
 use gridrt_grid::coherent::PacketOptions;
+use gridrt_grid::multires::{MultiresOptions, Policy};
 use gridrt_grid::trace::TraceOptions;
-use gridrt_grid::{AnyGrid, GridConfig, GridKind, structure};
+use gridrt_grid::{AnyGrid, BuildOptions, GridConfig, GridKind, InsertMode, structure};
 use gridrt_scene::gltf_load::load_path;
 use gridrt_scene::rays::{image_rays, random_rays};
 use gridrt_scene::{Aabb, Camera, Hit, Ray};
@@ -50,11 +51,21 @@ fn cameras(b: &Aabb) -> Vec<Camera> {
     v
 }
 
+/// Every kind at its defaults, and a deep octree-like multires grid with exact insertion (its
+/// packets visit child grids four levels down, layer by layer).
 fn grids(tris: &[[Vec3; 3]]) -> Vec<AnyGrid> {
-    GridKind::ALL
+    let mut grids: Vec<AnyGrid> = GridKind::ALL
         .into_iter()
         .map(|kind| structure::build(tris, &GridConfig { kind, ..GridConfig::default() }).unwrap().0)
-        .collect()
+        .collect();
+    let deep = GridConfig {
+        kind: GridKind::Multires,
+        build: BuildOptions { insert: InsertMode::Exact, parallel: true },
+        multires: MultiresOptions { policy: Policy::Octree, max_depth: 4, ..Default::default() },
+        ..GridConfig::default()
+    };
+    grids.push(structure::build(tris, &deep).unwrap().0);
+    grids
 }
 
 /// Every grid × tile size × mailbox on `rays` (an image `width` wide) against `expected`.
@@ -97,10 +108,8 @@ fn check_packets(
                     let what = format!("{name} {} tile {tile} any hit", grid.kind());
                     assert_same_occlusion(&what, tris, rays, expected, &hits);
                 }
-                if grid.has_packets() {
-                    let tiles = (width.div_ceil(tile as usize) * (rays.len() / width).div_ceil(tile as usize)) as u64;
-                    assert_eq!(ps.packets + ps.single_ray_packets, tiles, "{name}: every tile is one packet");
-                }
+                let tiles = (width.div_ceil(tile as usize) * (rays.len() / width).div_ceil(tile as usize)) as u64;
+                assert_eq!(ps.packets + ps.single_ray_packets, tiles, "{name}: every tile is one packet");
                 coherent += ps.packets;
             }
         }

@@ -245,8 +245,7 @@ fn bench_scene(
     // was each subject's rounds back to back: a burst of load on the machine then moved one
     // subject's speed and not the others', and the same ratio moved by up to 1.6× between runs).
     let packet_opts = PacketOptions { tile: args.tile, mailbox: true };
-    let walks_packets: Vec<bool> =
-        built.iter().map(|(_, _, b)| matches!(b, Built::Grid(g, _) if g.has_packets())).collect();
+    let walks_packets: Vec<bool> = built.iter().map(|(_, _, b)| matches!(b, Built::Grid(..))).collect();
     let mut single_best = vec![vec![f64::INFINITY; sets.len()]; built.len()];
     let mut packet_best = vec![vec![f64::INFINITY; sets.len()]; built.len()];
     let mut single_hits: Vec<Vec<Vec<Hit>>> = vec![Vec::new(); built.len()];
