@@ -1,5 +1,6 @@
 //! `gridrt experiment cgt`: coherent grid traversal (Wald et al. 2006; the survey's §2.2)
-//! against single rays on the CPU, on every scene, for the flat and macrocell grids: the
+//! against single rays on the CPU, on every scene, for the flat, macrocell and two-level grids
+//! (the last walks its child grids layer by layer inside each top slice): the
 //! packets' speed-up on primary rays and on shadow rays to the point light, by packet size and
 //! by image resolution (square images, a camera the model fills). It tests the paper's two
 //! claims, "frustum packets more than 10× faster than single rays" and "cost sublinear in the
@@ -19,8 +20,8 @@ use crate::lab::scenes::{LabScene, default_scenes, every_scene, procedural_scene
 use crate::lab::sweep::{best_of, machine};
 use crate::lab::views::{framed_camera, probe_grid};
 
-/// The grids that walk packets.
-const GRIDS: [GridKind; 2] = [GridKind::Flat, GridKind::Macrocell];
+/// The grids measured (every grid walks packets; multires walks them as the two-level grid does).
+const GRIDS: [GridKind; 3] = [GridKind::Flat, GridKind::Macrocell, GridKind::TwoLevel];
 /// The paper's claim of packets over single rays.
 const PAPER_SPEED_UP: f64 = 10.0;
 
