@@ -442,8 +442,9 @@ fn experiments_write_rows_and_charts() {
     // cgt: every image traced single and in packets, the packets' hits equal bit for bit.
     let cgt: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cgt.json")).unwrap()).unwrap();
     let rows = cgt.as_array().unwrap();
-    // 2 scenes × 2 grids × 2 ray kinds: at 96² single + 8×8, at 192² single + 4×4 + 8×8.
-    assert_eq!(rows.len(), 2 * 2 * 2 * 5, "{rows:?}");
+    // 2 scenes × 3 grids (flat, macrocell, twolevel) × 2 ray kinds: at 96² single + 8×8, at
+    // 192² single + 4×4 + 8×8.
+    assert_eq!(rows.len(), 2 * 3 * 2 * 5, "{rows:?}");
     assert!(rows.iter().all(|r| r["mismatches"] == 0 && r["ms"].as_f64().unwrap() > 0.0));
     assert!(rows.iter().any(|r| r["tile"] == 8 && r["packets"].as_u64().unwrap() > 0), "some packets walked");
     let hier: serde_json::Value =
@@ -835,13 +836,13 @@ fn bench_compares_grids_and_peers_on_the_same_rays() {
         }
     }
     // 5 grids with each insertion mode + 5 peer configurations per scene and ray set, and on the
-    // camera sets 6 rows of packets (flat, macrocell, proximity; each insertion mode).
+    // camera sets 10 rows of packets (every grid, each insertion mode).
     for set in ["framed", "random"] {
         let of_set: Vec<_> = rows.iter().filter(|r| r["rays"] == set).collect();
         let packets = of_set.iter().filter(|r| r["family"] == "grid packets").count();
         assert!(!of_set.is_empty(), "no {set} rows");
         let scenes = 2;
-        let want = if set == "random" { 0 } else { 6 * scenes };
+        let want = if set == "random" { 0 } else { 10 * scenes };
         assert_eq!((of_set.len(), packets), (15 * scenes + want, want), "{set} rows");
     }
     assert!(structures.contains(&"flat, 8×8 packets"), "{structures:?}");
@@ -942,7 +943,7 @@ fn cpu_render_with_and_without_packets_gives_the_same_hits() {
     let scene = tmp("packets-tis.glb");
     ok(&["gen", "teapot-in-stadium", "--size", "1", "-o", s(&scene)]);
     let trace_hits = tmp("packets-trace.hits");
-    for grid in ["flat", "macrocell", "multires"] {
+    for grid in ["flat", "macrocell", "multires", "twolevel"] {
         let mut hits = Vec::new();
         for packets in ["on", "off"] {
             let (png, h, r) = (tmp("packets.png"), tmp(&format!("{grid}-{packets}.hits")), tmp("packets.rays"));
@@ -973,7 +974,7 @@ fn cpu_render_with_and_without_packets_gives_the_same_hits() {
             let walked = v["packets"].as_u64().unwrap();
             match (grid, packets) {
                 // 13 × 8 tiles of 8×8, primary and shadow passes.
-                ("flat" | "macrocell", "on") => assert!(walked > 0 && walked <= 2 * 13 * 8, "{out}"),
+                (_, "on") => assert!(walked > 0 && walked <= 2 * 13 * 8, "{out}"),
                 _ => assert_eq!(walked, 0, "{out}"),
             }
             let img = image::open(&png).unwrap().to_rgba8();

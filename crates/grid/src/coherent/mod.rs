@@ -22,6 +22,12 @@
 //!
 //! An occlusion query ([`Query::Any`]) ends a ray at its first hit instead, as for single rays.
 //!
+//! The hierarchies (multires, two-level) are walked on their top grid's slices; in a top cell
+//! that is a child grid the packet visits the child's cells layer by layer along the walk axis,
+//! each layer where the rays' region between its planes reaches (Ize et al.'s hierarchical CGT,
+//! flattened into the top slice). The exactness argument holds one level down: every point a
+//! ray crosses in the slice lies in the region, so the leaf holding it is visited.
+//!
 //! Packets whose rays do not share the sign of one axis (incoherent) are traced as single rays.
 //! The rectangles are computed per ray, not from four corner rays, so any packet works: camera
 //! tiles (common origin), shadow rays towards a point light (common end) or arbitrary rays.
@@ -163,7 +169,7 @@ impl Hierarchy {
         let node = &self.nodes[a as usize];
         let margin = node.margin as f64;
         let cell: [f64; 3] = std::array::from_fn(|k| size[k] / node.res[k] as f64);
-        // The child's cells within `span` on `axes` (widened by the margin), None if none.
+        // The child's cells within `span` on axis `k` (widened by the margin), None if none.
         let range = |span: &[(f64, f64); 3], k: usize| -> Option<(u32, u32)> {
             let n = node.res[k];
             let l = (span[k].0 - base[k]) / cell[k] - margin;
