@@ -9,7 +9,8 @@
 //! transformed parents, non-uniform joint scale and an animated armature; morph targets with mesh
 //! and node default weights, a sparse target and LINEAR, STEP and CUBICSPLINE weights; quantized
 //! positions and morph deltas on a skin without inverse bind matrices whose joint is the mesh
-//! node's parent; instanced nodes under animated parents), and every shared animated scene.
+//! node's parent; instanced nodes under animated parents), random scenes ([`random_doc`]: what
+//! no hand-made file thought of) and every shared animated scene.
 //!
 //! three.js is found by [`gridrt_testkit::three_js_dir`] (`npm install three@0.170.0 --prefix
 //! ~/.cache/gridrt/three-0.170.0`, with `node` on the PATH); `.ci/run` installs it and sets
@@ -363,9 +364,9 @@ fn instanced_doc() -> Doc {
 /// matrices of the rest pose, arbitrary ones or none, u8/u16 joints and float or normalized
 /// integer weights; one or two clips whose channels pick node, path, interpolation and 1 to 5
 /// keys at random, starting anywhere in the first second, rotations and weights sometimes
-/// stored as normalized integers. No mesh is shared (three.js cannot
-/// load a mesh used both skinned and unskinned), no `matrix` node is animated (glTF) and no
-/// weights channel targets a node with a morphed mesh below it (three.js drives those too).
+/// stored as normalized integers. No mesh is shared (three.js cannot load a mesh used both
+/// skinned and unskinned), no `matrix` node is animated (glTF) and no weights channel targets a
+/// node with a morphed mesh below it (three.js drives those too).
 fn random_doc(seed: u64) -> Doc {
     let mut r = gridrt_scene::rng::Rng::new(seed);
     let mut d = Doc::new();
