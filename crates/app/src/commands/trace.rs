@@ -4,6 +4,7 @@
 use std::time::Instant;
 
 use anyhow::Context;
+use clap::ValueEnum;
 use gridrt_grid::trace::{TraceOptions, trace_batch};
 use gridrt_grid::{BatchStats, Traversal, brute};
 use gridrt_scene::rays::{read_rays, write_hits};
@@ -94,7 +95,7 @@ fn print_summary(args: &TraceArgs, m: &Summary, s: &BatchStats) -> anyhow::Resul
         let out = json!({
             "scene": scene, "structure": label, "rays": s.rays, "hits": s.hits,
             "build_ms": build_ms, "memory_bytes": memory, "trace_s": secs, "rays_per_s": rays_per_s,
-            "threads": rayon::current_num_threads(), "query": format!("{:?}", args.query).to_lowercase(),
+            "threads": rayon::current_num_threads(), "query": args.query.to_possible_value().map(|v| v.get_name().to_owned()),
             "mean_cells_per_ray": s.mean_cells(), "mean_tests_per_ray": s.mean_tests(),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);

@@ -189,6 +189,17 @@ impl SliceRect {
     }
 }
 
+/// The cells `0..n` of one axis that the coordinates `lo..=hi` (in cells) touch: each end's
+/// floor, clamped to the axis (truncation of a non-negative value); `None` when the interval
+/// lies outside the axis or is NaN.
+#[inline]
+pub fn cells_of(lo: f64, hi: f64, n: u32) -> Option<(u32, u32)> {
+    if hi < 0.0 || lo >= n as f64 || lo.is_nan() || hi.is_nan() {
+        return None;
+    }
+    Some(((lo.max(0.0) as u32).min(n - 1), (hi.max(0.0) as u32).min(n - 1)))
+}
+
 /// On the `n`-th axis other than the walk axis, the lowest and highest coordinates the lines of
 /// `b` (intercepts at plane `s_ref`) take between planes `near` and `far`, widened by
 /// [`SLICE_MARGIN_CELLS`]: a line is linear in the plane, so its extremes are at the two planes.
@@ -431,13 +442,7 @@ impl SliceWalk {
         span[a] = (k as f64, k as f64 + 1.0);
         for (n, u) in [(a + 1) % 3, (a + 2) % 3].into_iter().enumerate() {
             let (lo, hi) = line_span(b, n, self.s_ref, near, far);
-            let r = res[u] as f64;
-            if hi < 0.0 || lo >= r || lo.is_nan() || hi.is_nan() {
-                return None;
-            }
-            // The floor, clamped to the grid (truncation of a non-negative value).
-            l[u] = (lo.max(0.0) as u32).min(res[u] - 1);
-            h[u] = (hi.max(0.0) as u32).min(res[u] - 1);
+            (l[u], h[u]) = cells_of(lo, hi, res[u])?;
             span[u] = (lo, hi);
         }
         Some(SliceRect { lo: l, hi: h, span, frustum: (a, self.s_ref, *b) })

@@ -170,14 +170,9 @@ impl Hierarchy {
         let margin = node.margin as f64;
         let cell: [f64; 3] = std::array::from_fn(|k| size[k] / node.res[k] as f64);
         // The child's cells within `span` on axis `k` (widened by the margin), None if none.
-        let range = |span: &[(f64, f64); 3], k: usize| -> Option<(u32, u32)> {
-            let n = node.res[k];
-            let l = (span[k].0 - base[k]) / cell[k] - margin;
-            let h = (span[k].1 - base[k]) / cell[k] + margin;
-            if h < 0.0 || l >= n as f64 || l.is_nan() || h.is_nan() {
-                return None;
-            }
-            Some(((l.max(0.0) as u32).min(n - 1), (h.max(0.0) as u32).min(n - 1)))
+        let range = |span: &[(f64, f64); 3], k: usize| {
+            let to_cells = |x: f64| (x - base[k]) / cell[k];
+            frustum::cells_of(to_cells(span[k].0) - margin, to_cells(span[k].1) + margin, node.res[k])
         };
         let w = rect.walk_axis();
         let [u, v] = [(w + 1) % 3, (w + 2) % 3];

@@ -137,6 +137,39 @@ fn rigid_doc() -> Doc {
     d
 }
 
+/// JOINTS_0 of `joints` (four per vertex) as `component_type` 5121 (u8) or 5123 (u16).
+fn joints_accessor(d: &mut Doc, joints: &[u16], component_type: u32) -> usize {
+    let bytes: Vec<u8> = match component_type {
+        5121 => joints.iter().map(|&j| j as u8).collect(),
+        _ => joints.iter().flat_map(|j| j.to_le_bytes()).collect(),
+    };
+    d.accessor(&bytes, component_type, joints.len() / 4, "VEC4")
+}
+
+/// WEIGHTS_0 of `weights` (each vertex's summing to 1) as `component_type` 5126 (float) or
+/// 5121/5123 (normalized u8/u16, quantized so that each vertex's sum is exactly the maximum).
+fn weights_accessor(d: &mut Doc, weights: &[[f64; 4]], component_type: u32) -> usize {
+    if component_type == 5126 {
+        return d.floats(&f32s(&weights.concat()), "VEC4", 4);
+    }
+    let max = if component_type == 5121 { 255.0 } else { 65535.0 };
+    let mut bytes = Vec::new();
+    for w in weights {
+        let mut q = w.map(|x| (x * max).round());
+        q[0] += max - q.iter().sum::<f64>();
+        for x in q {
+            if component_type == 5121 {
+                bytes.push(x as u8);
+            } else {
+                bytes.extend((x as u16).to_le_bytes());
+            }
+        }
+    }
+    let k = d.accessor(&bytes, component_type, weights.len(), "VEC4");
+    d.json["accessors"][k]["normalized"] = json!(true);
+    k
+}
+
 /// A sheet skinned to a chain of three joints and a fourth beside them (weights of every vertex
 /// on all four), stored as `weights` (5121/5123 normalized or 5126 float) and u8 or u16 joints;
 /// the mesh node and its parent are transformed (ignored, per the glTF rule) and move; the
@@ -155,36 +188,8 @@ fn skin_doc(joint_type: u32, weight_type: u32) -> Doc {
         weights.push(w.map(|x| x / sum));
         joints.push([0u16, 1, 2, 3]);
     }
-    let ja = match joint_type {
-        5121 => d.accessor(&joints.iter().flatten().map(|&j| j as u8).collect::<Vec<_>>(), 5121, p.len(), "VEC4"),
-        _ => {
-            let bytes: Vec<u8> = joints.iter().flatten().flat_map(|j| j.to_le_bytes()).collect();
-            d.accessor(&bytes, 5123, p.len(), "VEC4")
-        }
-    };
-    let wa = match weight_type {
-        5126 => d.floats(&f32s(&weights.concat()), "VEC4", 4),
-        _ => {
-            // Quantized so that each vertex's weights sum to exactly the type's maximum.
-            let max = if weight_type == 5121 { 255.0 } else { 65535.0 };
-            let q: Vec<[f64; 4]> = weights
-                .iter()
-                .map(|w| {
-                    let mut q = w.map(|x| (x * max).round());
-                    q[0] += max - q.iter().sum::<f64>();
-                    q
-                })
-                .collect();
-            let bytes: Vec<u8> = if weight_type == 5121 {
-                q.iter().flatten().map(|&x| x as u8).collect()
-            } else {
-                q.iter().flatten().flat_map(|&x| (x as u16).to_le_bytes()).collect()
-            };
-            let k = d.accessor(&bytes, weight_type, p.len(), "VEC4");
-            d.json["accessors"][k]["normalized"] = json!(true);
-            k
-        }
-    };
+    let ja = joints_accessor(&mut d, &joints.concat(), joint_type);
+    let wa = weights_accessor(&mut d, &weights, weight_type);
     let m = d.push(
         "meshes",
         json!({"primitives": [{"attributes": {"POSITION": pa, "JOINTS_0": ja, "WEIGHTS_0": wa}, "indices": ia}]}),
@@ -456,32 +461,8 @@ fn random_doc(seed: u64) -> Doc {
                 let sum: f64 = wv.iter().sum();
                 w.push(wv.map(|x| x / sum));
             }
-            let ja = if r.f32() < 0.5 {
-                d.accessor(&ids.iter().map(|&j| j as u8).collect::<Vec<_>>(), 5121, p.len(), "VEC4")
-            } else {
-                d.accessor(&ids.iter().flat_map(|j| j.to_le_bytes()).collect::<Vec<_>>(), 5123, p.len(), "VEC4")
-            };
-            let wa = match r.below(3) {
-                0 => d.floats(&f32s(&w.concat()), "VEC4", 4),
-                q => {
-                    let max = if q == 1 { 255.0 } else { 65535.0 };
-                    let mut bytes = Vec::new();
-                    for wv in &w {
-                        let mut v = wv.map(|x| (x * max).round());
-                        v[0] += max - v.iter().sum::<f64>();
-                        for x in v {
-                            if q == 1 {
-                                bytes.push(x as u8);
-                            } else {
-                                bytes.extend((x as u16).to_le_bytes());
-                            }
-                        }
-                    }
-                    let a = d.accessor(&bytes, if q == 1 { 5121 } else { 5123 }, p.len(), "VEC4");
-                    d.json["accessors"][a]["normalized"] = json!(true);
-                    a
-                }
-            };
+            let ja = joints_accessor(&mut d, &ids, if r.f32() < 0.5 { 5121 } else { 5123 });
+            let wa = weights_accessor(&mut d, &w, [5126, 5121, 5123][r.below(3) as usize]);
             prim["attributes"]["JOINTS_0"] = json!(ja);
             prim["attributes"]["WEIGHTS_0"] = json!(wa);
             let mut skin = json!({"joints": joints});
