@@ -280,6 +280,10 @@ pub struct GridArgs {
     /// … at this many more cell steps per byte per triangle (default 8; 0: no DRAM tier).
     #[arg(long, value_parser = parse_memory_weight)]
     pub dram_weight: Option<f64>,
+    /// Guess-and-check's tie tolerance: from the least T(m), the auto resolution moves to each
+    /// coarser sample whose T(m) is within this fraction of it (default 0.03; 0: the least T(m)).
+    #[arg(long, value_parser = parse_memory_weight)]
+    pub tie_tolerance: Option<f64>,
     /// Number of resolutions sampled by guess-and-check.
     #[arg(long, default_value_t = CostModel::memory_aware().samples)]
     pub samples: u32,

@@ -35,6 +35,12 @@
 //!   shared scenes (auto grids of at most 15 MB) it changes nothing; on the 1M-triangle crowd,
 //!   the 2.1M mountain and the 2.4M particles the sweep's fastest grid lay at 0.6–0.85× the m
 //!   chosen without it, which it picks, with builds faster by as much (2026-12-04).
+//! - ties toward the coarser grid ([`CostModel::tie_tolerance`], 3% in the memory-aware model):
+//!   from the least T(m), each next coarser sample whose T(m) is within the tolerance of it is
+//!   taken. Near its optimum T(m) is flat (within 1–3% over a factor 1.3 in m on the shared
+//!   scenes) and the sampled N_m is an estimate, so the least sample is not known to be the
+//!   fastest; the coarser one is known to be smaller and to build faster. The sweeps of
+//!   2026-12-06 had the fastest m at or below the least sample on seven of nine scenes.
 //! - exact insertion takes the resolution the auto policy picks for bounding-box insertion.
 //!   With exact N_m the memory term shrinks and T(m) picks grids one sample finer on most
 //!   scenes, which measured no faster (the engine's and the teapot's 7–15% slower) and up to
@@ -66,6 +72,13 @@ pub const MEMORY_AWARE_T_INTER: f64 = 0.35;
 pub const MEMORY_AWARE_DRAM_BYTES: f64 = (16 * 1024 * 1024) as f64;
 pub const MEMORY_AWARE_DRAM_WEIGHT: f64 = 8.0;
 
+/// [`CostModel::memory_aware`]'s tie tolerance: samples whose T(m) lies within this fraction of
+/// the least are ties, and the coarsest of them is taken. The sampled N_m behind T(m) is an
+/// estimate within about 2% of the exact count, so a finer grid that the model prices less than
+/// 2% cheaper is not known to be faster, while it is known to cost more memory and build time.
+/// Read the README's tables for the sweeps behind the value.
+pub const MEMORY_AWARE_TIE_TOLERANCE: f64 = 0.03;
+
 /// The constants of T = Tsetup + m·Tstep + μ·Tinter, plus the guess-and-check settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CostModel {
@@ -94,6 +107,10 @@ pub struct CostModel {
     pub dram_bytes: f64,
     #[serde(default)]
     pub dram_weight: f64,
+    /// Samples whose T(m) is within this fraction of the least count as ties, broken toward
+    /// the coarsest grid (0: the least T(m), the survey's rule).
+    #[serde(default)]
+    pub tie_tolerance: f64,
 }
 
 impl Default for CostModel {
@@ -110,6 +127,7 @@ impl Default for CostModel {
             cache_bytes: 0.0,
             dram_bytes: 0.0,
             dram_weight: 0.0,
+            tie_tolerance: 0.0,
         }
     }
 }
@@ -128,6 +146,7 @@ impl CostModel {
             cache_bytes: MEMORY_AWARE_CACHE_BYTES,
             dram_bytes: MEMORY_AWARE_DRAM_BYTES,
             dram_weight: MEMORY_AWARE_DRAM_WEIGHT,
+            tie_tolerance: MEMORY_AWARE_TIE_TOLERANCE,
             ..CostModel::default()
         }
     }
@@ -304,22 +323,33 @@ pub fn choose_with(
             let (counts, _) =
                 count_refs_curve_with(tris, bounds, extents, &resolutions, InsertMode::BoundingBox, parallel);
             let curve = costed(tris.len(), model, &resolutions, counts);
-            let best = best_sample(&curve).expect("at least one sample");
+            let best = model.best_sample(&curve).expect("at least one sample");
             return ResolutionChoice { resolution: best.resolution, policy, curve };
         }
     };
     ResolutionChoice { resolution, policy, curve: Vec::new() }
 }
 
-/// The sample guess-and-check takes: the least T(m) among those a grid can hold (at most
-/// [`crate::build::MAX_REFS`] references; for long slivers the model's optimum can lie far
-/// beyond it), else the coarsest. `None` for an empty curve.
-pub fn best_sample(curve: &[CostSample]) -> Option<&CostSample> {
-    curve
-        .iter()
-        .filter(|s| s.n_m <= crate::build::MAX_REFS)
-        .min_by(|a, b| a.cost.total_cmp(&b.cost))
-        .or_else(|| curve.iter().min_by_key(|s| s.cells))
+impl CostModel {
+    /// The sample guess-and-check takes among those a grid can hold (at most
+    /// [`crate::build::MAX_REFS`] references; for long slivers the model's optimum can lie far
+    /// beyond it): the least T(m), then each next coarser sample as long as its T(m) stays
+    /// within [`CostModel::tie_tolerance`] of the least (a flat basin, not a distant dip of a
+    /// curve that is not convex); with none buildable, the coarsest sample. `curve` is in
+    /// increasing m, as [`sample_curve`] returns it. `None` for an empty curve.
+    pub fn best_sample<'a>(&self, curve: &'a [CostSample]) -> Option<&'a CostSample> {
+        let buildable = |s: &CostSample| s.n_m <= crate::build::MAX_REFS;
+        let Some((mut i, least)) =
+            curve.iter().enumerate().filter(|(_, s)| buildable(s)).min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
+        else {
+            return curve.iter().min_by_key(|s| s.cells);
+        };
+        let bound = least.cost * (1.0 + self.tie_tolerance.max(0.0));
+        while i > 0 && buildable(&curve[i - 1]) && curve[i - 1].cost <= bound && curve[i - 1].cells < curve[i].cells {
+            i -= 1;
+        }
+        Some(&curve[i])
+    }
 }
 
 /// Above this many triangles, guess-and-check estimates N_m for bounding-box insertion from a

@@ -29,6 +29,7 @@ impl GridArgs {
             cache_bytes: self.cache_kib.map_or(d.cache_bytes, |k| k * 1024.0),
             dram_bytes: self.dram_mib.map_or(d.dram_bytes, |k| k * 1024.0 * 1024.0),
             dram_weight: self.dram_weight.unwrap_or(d.dram_weight),
+            tie_tolerance: self.tie_tolerance.unwrap_or(d.tie_tolerance),
             ..d
         };
         #[cfg(not(target_arch = "wasm32"))]

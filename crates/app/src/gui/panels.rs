@@ -191,6 +191,7 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
         ui.add(egui::Slider::new(&mut dram_mib, 0.0..=4096.0).logarithmic(true).text("DRAM tier from (MiB)"));
         c.dram_bytes = dram_mib * 1024.0 * 1024.0;
         ui.add(egui::Slider::new(&mut c.dram_weight, 0.0..=32.0).text("DRAM weight"));
+        ui.add(egui::Slider::new(&mut c.tie_tolerance, 0.0..=0.2).text("tie tolerance (toward coarser)"));
         ui.horizontal(|ui| {
             if ui.button("survey defaults").clicked() {
                 *c = Default::default();

@@ -394,5 +394,50 @@ fn auto_resolution_never_exceeds_the_reference_limit() {
     let chosen = choice.curve.iter().find(|s| s.resolution == choice.resolution).unwrap();
     assert!(chosen.n_m <= limit, "{chosen:?}");
     assert!(choice.curve.iter().filter(|s| s.n_m <= limit).all(|s| s.cost >= chosen.cost));
-    assert_eq!(resolution::best_sample(&choice.curve).unwrap(), chosen);
+    assert_eq!(model.best_sample(&choice.curve).unwrap(), chosen);
+}
+
+/// Guess-and-check's ties: the least T(m) without a tolerance; with one, each next coarser
+/// sample within it of the least (the whole flat basin), never a distant coarser dip past a
+/// sample above the bound, and never an unbuildable sample.
+#[test]
+fn ties_go_to_the_coarser_grid_within_the_basin() {
+    let sample = |m: u32, cost: f64, n_m: u64| resolution::CostSample {
+        m: m as f64,
+        resolution: [m; 3],
+        cells: (m as u64).pow(3),
+        n_m,
+        mu: 0.0,
+        cost,
+    };
+    // In increasing m: a dip at 4, a bump at 6, a basin 8..12 with its least at 12.
+    let curve = [
+        sample(4, 100.4, 10),
+        sample(6, 110.0, 10),
+        sample(8, 102.5, 10),
+        sample(10, 101.0, 10),
+        sample(12, 100.0, 10),
+        sample(14, 104.0, 10),
+    ];
+    let res =
+        |t: f64| CostModel { tie_tolerance: t, ..CostModel::memory_aware() }.best_sample(&curve).unwrap().resolution[0];
+    assert_eq!(res(0.0), 12, "no tolerance: the least T(m)");
+    assert_eq!(res(0.005), 12, "the next coarser sample is 1% above");
+    assert_eq!(res(0.02), 10);
+    assert_eq!(res(0.03), 8, "the whole basin");
+    assert_eq!(res(0.2), 4, "a tolerance over the bump reaches the dip");
+    assert_eq!(CostModel::default().tie_tolerance, 0.0, "the survey's model takes the least T(m)");
+    assert_eq!(CostModel::memory_aware().tie_tolerance, resolution::MEMORY_AWARE_TIE_TOLERANCE);
+    // A coarser sample that cannot be built is not a tie partner, and a least T(m) that cannot be
+    // built is not the least.
+    let limit = gridrt_grid::build::MAX_REFS;
+    let mut blocked = curve;
+    blocked[3].n_m = limit + 1;
+    let t3 = CostModel { tie_tolerance: 0.03, ..CostModel::memory_aware() };
+    assert_eq!(t3.best_sample(&blocked).unwrap().resolution[0], 12);
+    blocked[4].n_m = limit + 1;
+    assert_eq!(t3.best_sample(&blocked).unwrap().resolution[0], 4, "least buildable: 4 (100.4)");
+    let none: Vec<_> = curve.iter().map(|s| resolution::CostSample { n_m: limit + 1, ..*s }).collect();
+    assert_eq!(t3.best_sample(&none).unwrap().resolution[0], 4, "nothing buildable: the coarsest");
+    assert!(t3.best_sample(&[]).is_none());
 }

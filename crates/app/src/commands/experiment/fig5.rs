@@ -9,7 +9,7 @@
 //! Scenes: from `--scenes DIR` (its manifest.json kinds: the two largest scanned models, the
 //! largest architectural one, the particles and the slivers), else procedural stand-ins.
 
-use gridrt_grid::resolution::{best_sample, cubic_cells, sample_curve, samples_at};
+use gridrt_grid::resolution::{cubic_cells, sample_curve, samples_at};
 use gridrt_grid::{CostModel, InsertMode};
 use serde::Serialize;
 
@@ -66,7 +66,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         let rays = mixed_rays(&sc.bounds, rays_n, 3);
         let gpu = session(ctx.as_ref(), sc)?;
         let interval = sample_curve(&sc.tris, &sc.bounds, &model, InsertMode::BoundingBox, true);
-        let auto = best_sample(&interval).expect("a sample").resolution;
+        let auto = model.best_sample(&interval).expect("a sample").resolution;
         // The measured optimum often sits at or below the interval's low end, (2N·Tinter/Tstep)^⅓:
         // the sweep starts at half of it.
         let below: Vec<[u32; 3]> = (1..=BELOW)
