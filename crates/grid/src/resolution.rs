@@ -37,10 +37,11 @@
 //!   chosen without it, which it picks, with builds faster by as much (2026-12-04).
 //! - ties toward the coarser grid ([`CostModel::tie_tolerance`], 3% in the memory-aware model):
 //!   from the least T(m), each next coarser sample whose T(m) is within the tolerance of it is
-//!   taken. Near its optimum T(m) is flat (within 1–3% over a factor 1.3 in m on the shared
-//!   scenes) and the sampled N_m is an estimate, so the least sample is not known to be the
-//!   fastest; the coarser one is known to be smaller and to build faster. The sweeps of
-//!   2026-12-06 had the fastest m at or below the least sample on seven of nine scenes.
+//!   taken. Near its optimum T(m) is flat (one sample, a factor 1.13 in m, either side is within
+//!   0.4–4% of it on the shared scenes but the Cornell box) and the sampled N_m is an estimate,
+//!   so the least sample is not known to be the fastest; the coarser one is known to be smaller
+//!   and to build faster. A sweep of 2026-12-06 had the fastest m below the least sample on seven
+//!   of nine scenes.
 //! - exact insertion takes the resolution the auto policy picks for bounding-box insertion.
 //!   With exact N_m the memory term shrinks and T(m) picks grids one sample finer on most
 //!   scenes, which measured no faster (the engine's and the teapot's 7–15% slower) and up to
@@ -72,11 +73,11 @@ pub const MEMORY_AWARE_T_INTER: f64 = 0.35;
 pub const MEMORY_AWARE_DRAM_BYTES: f64 = (16 * 1024 * 1024) as f64;
 pub const MEMORY_AWARE_DRAM_WEIGHT: f64 = 8.0;
 
-/// [`CostModel::memory_aware`]'s tie tolerance: samples whose T(m) lies within this fraction of
-/// the least are ties, and the coarsest of them is taken. The sampled N_m behind T(m) is an
-/// estimate within about 2% of the exact count, so a finer grid that the model prices less than
-/// 2% cheaper is not known to be faster, while it is known to cost more memory and build time.
-/// Read the README's tables for the sweeps behind the value.
+/// [`CostModel::memory_aware`]'s tie tolerance: from the least T(m), each next coarser sample
+/// within this fraction of it is taken. The sampled N_m behind T(m) is an estimate within about
+/// 2% of the exact count and the model leaves costs out, so a finer grid that it prices a few
+/// percent cheaper is not known to be faster, while it is known to cost more memory and build
+/// time. Read the README's tables for the sweeps behind the value.
 pub const MEMORY_AWARE_TIE_TOLERANCE: f64 = 0.03;
 
 /// The constants of T = Tsetup + m·Tstep + μ·Tinter, plus the guess-and-check settings.
