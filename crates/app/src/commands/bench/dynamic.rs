@@ -1,6 +1,7 @@
 //! `gridrt bench --dynamic`: the survey's case for grids, measured. On every animated scene
 //! (`<scenes>/animated`, default ../shared/scenes/animated) and a generated crowd of ≥ 1M
-//! triangles, each frame is posed once; then every grid kind is rebuilt from scratch and every
+//! triangles, each frame is posed once; then every grid kind is rebuilt from scratch (and traced
+//! in single rays and in coherent packets) and every
 //! BVH strategy is rebuilt (obvhs BVH2 `fastest_build`, obvhs CWBVH, `bvh`'s `build_par`) or
 //! refit (obvhs BVH2, built once with `medium_build`), and all trace the same 512×512 primary
 //! rays and the same shadow rays (from the flat grid's primary hits; occlusion queries, each
@@ -90,7 +91,7 @@ enum Strategy {
 impl Strategy {
     fn all(with_peers: bool) -> Vec<Strategy> {
         let mut v: Vec<Strategy> = GridKind::ALL.iter().map(|&k| Strategy::Grid(k)).collect();
-        v.extend([GridKind::Flat, GridKind::Macrocell].map(Strategy::GridPackets));
+        v.extend(GridKind::ALL.iter().map(|&k| Strategy::GridPackets(k)));
         #[cfg(feature = "peers")]
         if with_peers {
             use super::peers::PeerKind;
