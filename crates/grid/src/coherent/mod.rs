@@ -29,6 +29,8 @@
 //! ray crosses in the slice lies in the region, so the leaf holding it is visited.
 //!
 //! Packets whose rays do not share the sign of one axis (incoherent) are traced as single rays.
+//! In a hierarchy, coherent packets are also traced as single rays while recent packets of the
+//! image have tested far more triangles per ray than single rays do ([`WASTE_RATIO`]).
 //! The rectangles are computed per ray, not from four corner rays, so any packet works: camera
 //! tiles (common origin), shadow rays towards a point light (common end) or arbitrary rays.
 
@@ -67,6 +69,10 @@ pub trait SliceCells {
     /// (`lo..=hi`, within the grid); a hierarchy's with those of every occupied leaf below it
     /// that the rays' region (`span`) reaches.
     fn for_each_occupied(&self, rect: &frustum::SliceRect, f: &mut impl FnMut(&[u32]));
+    /// Whether coherent packets are watched for waste ([`WASTE_RATIO`]): a hierarchy's packet
+    /// checks its rays' ends once per top slice, which can hold many layers of geometry behind
+    /// the hits; a flat grid's checks every slice, and its probes would only cost.
+    const WATCHES_WASTE: bool = false;
 }
 
 impl SliceCells for FlatGrid {
@@ -129,6 +135,8 @@ impl SliceCells for Hierarchy {
     fn geom(&self) -> &GridGeometry {
         &self.geom
     }
+
+    const WATCHES_WASTE: bool = true;
 
     /// Ize et al.'s hierarchical CGT, flattened: the packet walks the top grid's slices, and in
     /// a top cell that is a child grid it visits the child's cells the rays' region reaches
@@ -221,7 +229,8 @@ pub struct PacketStats {
     /// Packets walked slice by slice.
     pub packets: u64,
     /// Packets traced as single rays (incoherent: no axis whose sign all rays share, or a
-    /// frustum that would visit more cells than the rays one by one).
+    /// frustum that would visit more cells than the rays one by one; in a hierarchy also the
+    /// packets its waste watch traces as single rays, [`WASTE_RATIO`]).
     pub single_ray_packets: u64,
 }
 
@@ -245,6 +254,10 @@ pub struct Packet {
     active: Vec<u32>,
     rays: PacketRays,
     mailbox: Mailbox<PACKET_MAILBOX_SIZE>,
+    /// Triangle tests per ray of recent coherent packets walked as packets and as single rays
+    /// (see [`WASTE_RATIO`]), and how many coherent packets this state has seen.
+    waste: WasteTally,
+    coherent_seen: u64,
     /// Chunks checked against triangles' boxes and chunks spared by it, over recent packets
     /// (see [`CULL_WORTH`]).
     cull_stats: packet_test::CullStats,
@@ -260,10 +273,61 @@ pub struct Packet {
 pub const CULL_WORTH: f64 = 0.25;
 /// See [`CULL_WORTH`].
 pub const CULL_PROBE: u64 = 32;
+/// In a grid that [`SliceCells::WATCHES_WASTE`] (the hierarchies), a coherent packet is traced
+/// as single rays while the packets' rays each test more than this many times the triangles a
+/// single ray tests (both measured on the same thread's recent packets of the image): a
+/// triangle's test against eight lanes costs about one single ray's test, so beyond eight times
+/// the lanes' tests cost more, and twice that leaves room for the rest of a packet's savings.
+/// On the 1M-triangle crowd a hierarchy's packets tested 70–80 times a single ray's triangles
+/// (a top slice holds many layers of tubes behind the hits); on meshes 1.4–3.4 times.
+pub const WASTE_RATIO: f64 = 16.0;
+/// Every this many coherent packets of a grid that watches for waste, one is traced the other
+/// way (as single rays while packets pay, as a packet while they do not), so that both tests
+/// per ray stay measured.
+pub const WASTE_PROBE: u64 = 64;
 /// Chunks checked before the share spared decides (a thread's first packets always check).
 pub const CULL_WARM_UP: u64 = 256;
 /// Beyond this many chunks checked the counts are halved, so they follow recent packets.
 pub const CULL_WINDOW: u64 = 1 << 14;
+
+/// Triangle tests and rays, summed over recent packets (halved as they grow, so the sums follow
+/// the image).
+#[derive(Clone, Copy, Debug, Default)]
+struct TestTally {
+    tests: u64,
+    rays: u64,
+}
+
+impl TestTally {
+    fn add(&mut self, stats: &[RayStats]) {
+        if self.rays > 1 << 14 {
+            *self = TestTally { tests: self.tests / 2, rays: self.rays / 2 };
+        }
+        self.tests += stats.iter().map(|s| s.tests as u64).sum::<u64>();
+        self.rays += stats.len() as u64;
+    }
+
+    fn per_ray(&self) -> f64 {
+        self.tests as f64 / self.rays.max(1) as f64
+    }
+}
+
+/// Tests per ray of coherent packets walked as packets and as single rays ([`WASTE_RATIO`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct WasteTally {
+    packets: TestTally,
+    singles: TestTally,
+}
+
+impl WasteTally {
+    /// Whether packets have tested more than [`WASTE_RATIO`] times the single rays' triangles
+    /// per ray (a single ray testing less than one counts as one).
+    fn wasteful(&self) -> bool {
+        self.packets.rays > 0
+            && self.singles.rays > 0
+            && self.packets.per_ray() > WASTE_RATIO * self.singles.per_ray().max(1.0)
+    }
+}
 
 /// How a packet was traced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -292,12 +356,24 @@ impl Packet {
         assert!(rays.len() == hits.len() && rays.len() == stats.len(), "one hit and one stats record per ray");
         let walk = SliceWalk::new(grid.geom(), rays, &mut self.lanes, &mut self.active)
             .filter(|w| w.coherent_enough(grid.geom().res, COHERENCE_RATIO));
-        let Some(mut walk) = walk else {
+        let single_rays = |hits: &mut [Hit], stats: &mut [RayStats]| {
             for ((r, h), s) in rays.iter().zip(hits.iter_mut()).zip(stats.iter_mut()) {
                 (*h, *s) = single(r);
             }
+        };
+        let Some(mut walk) = walk else {
+            single_rays(hits, stats);
             return PacketWalk::SingleRays;
         };
+        // A coherent packet as single rays when packets have been wasteful here, and every
+        // WASTE_PROBE-th the other way (the first one of a state as single rays, to measure them).
+        self.coherent_seen += 1;
+        let probe = self.coherent_seen % WASTE_PROBE == 1;
+        if G::WATCHES_WASTE && probe != self.waste.wasteful() {
+            single_rays(hits, stats);
+            self.waste.singles.add(stats);
+            return PacketWalk::SingleRays;
+        }
         self.best.clear();
         self.best.resize(rays.len(), Hit::MISS);
         self.mailbox = Mailbox::default();
@@ -400,6 +476,9 @@ impl Packet {
             record(&mut stats[i as usize], &lanes[i as usize], &self.cells_before, cells, tests);
         }
         hits.copy_from_slice(&self.best);
+        if G::WATCHES_WASTE {
+            self.waste.packets.add(stats);
+        }
         PacketWalk::Coherent
     }
 }

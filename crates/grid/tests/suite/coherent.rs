@@ -198,3 +198,47 @@ fn packets_equal_brute_force_on_shared_scenes() {
         check_scene_images(&name, &tris, 24, 18);
     }
 }
+
+/// A stack of 80 thin parallel layers seen face on: a single ray stops at the first layer, while
+/// a two-level grid's packet checks its rays' ends once per top slice, which holds dozens of
+/// layers. The hierarchy's waste watch traces such packets as single rays after measuring them;
+/// over one layer of large quads it keeps its packets. Hits stay those of brute force either way.
+#[test]
+fn wasteful_hierarchy_packets_turn_to_single_rays() {
+    let stats_over = |layers: usize, n: usize| {
+        let size = 16.0 / n as f32;
+        let mut tris = Vec::new();
+        for k in 0..layers {
+            let z = k as f32 * 0.025;
+            for i in 0..n {
+                for j in 0..n {
+                    let (x, y) = (i as f32 * size, j as f32 * size);
+                    let p = |dx: f32, dy: f32| Vec3::new(x + dx * size, y + dy * size, z);
+                    tris.push([p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]);
+                    tris.push([p(0.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)]);
+                }
+            }
+        }
+        let (w, h) = (64, 64);
+        let cam =
+            Camera { eye: Vec3::new(8.3, 7.9, 30.0), target: Vec3::new(8.0, 8.0, 0.0), up: Vec3::Y, vfov_deg: 25.0 };
+        let rays = image_rays(&cam, w, h);
+        let (expected, _) = reference(&tris, &rays);
+        assert!(expected.iter().all(|h| h.is_hit()), "the view sees the stack only");
+        let grid =
+            structure::build(&tris, &GridConfig { kind: GridKind::TwoLevel, ..GridConfig::default() }).unwrap().0;
+        let packets = PacketOptions { tile: 8, mailbox: true };
+        let (hits, _, ps) = grid.trace_packets(&tris, &rays, w as usize, TraceOptions::default(), packets, false);
+        assert_same_hits(&format!("two-level packets over {layers} layers"), &rays, &expected, &hits);
+        assert_eq!(ps.packets + ps.single_ray_packets, 64);
+        ps
+    };
+    // Per band of eight packets: the first as single rays (measured), the second as a packet
+    // (measured: wasteful), the rest as single rays.
+    let deep = stats_over(80, 16);
+    assert!(deep.packets >= 1 && deep.single_ray_packets >= 48, "80 layers: {deep:?}");
+    // One layer of 4 × 4 quads: the first of each band measured as single rays, the others as
+    // packets.
+    let thin = stats_over(1, 4);
+    assert!(thin.packets >= 48, "1 layer: {thin:?}");
+}
