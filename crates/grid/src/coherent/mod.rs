@@ -275,7 +275,7 @@ pub const CULL_WORTH: f64 = 0.25;
 pub const CULL_PROBE: u64 = 32;
 /// In a grid that [`SliceCells::WATCHES_WASTE`] (the hierarchies), a coherent packet is traced
 /// as single rays while the packets' rays each test more than this many times the triangles a
-/// single ray tests (both measured on the same thread's recent packets of the image): a
+/// single ray tests (both measured on the recent packets of the same band of tiles): a
 /// triangle's test against eight lanes costs about one single ray's test, so beyond eight times
 /// the lanes' tests cost more, and twice that leaves room for the rest of a packet's savings.
 /// On the 1M-triangle crowd a hierarchy's packets tested 70–80 times a single ray's triangles
