@@ -25,6 +25,7 @@ pub struct AmanatidesWoo {
 }
 
 impl AmanatidesWoo {
+    #[inline(always)]
     pub fn new(ray: &GridRay, res: UVec3) -> AmanatidesWoo {
         let cur = Cursor::start(ray, res);
         // On the axes the ray moves along, the next wall and its crossing; elsewhere 0 and
