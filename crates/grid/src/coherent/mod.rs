@@ -285,6 +285,8 @@ pub const WASTE_RATIO: f64 = 16.0;
 /// way (as single rays while packets pay, as a packet while they do not), so that both tests
 /// per ray stay measured.
 pub const WASTE_PROBE: u64 = 64;
+/// Beyond this many rays a waste tally's sums are halved, so they follow recent packets.
+pub const WASTE_WINDOW: u64 = 1 << 14;
 /// Chunks checked before the share spared decides (a thread's first packets always check).
 pub const CULL_WARM_UP: u64 = 256;
 /// Beyond this many chunks checked the counts are halved, so they follow recent packets.
@@ -300,7 +302,7 @@ struct TestTally {
 
 impl TestTally {
     fn add(&mut self, stats: &[RayStats]) {
-        if self.rays > 1 << 14 {
+        if self.rays > WASTE_WINDOW {
             *self = TestTally { tests: self.tests / 2, rays: self.rays / 2 };
         }
         self.tests += stats.iter().map(|s| s.tests as u64).sum::<u64>();

@@ -200,6 +200,14 @@ const BUILD_ROUNDS: usize = 9;
 const TRACE_ROUND_BUDGET_S: f64 = 2.0;
 const MAX_TRACE_ROUNDS: usize = 8;
 
+/// Whether timed trace rounds go on after `round` of them, begun at `start`: at least
+/// `--repeat`, then more while they fit in [`TRACE_ROUND_BUDGET_S`] (at most
+/// [`MAX_TRACE_ROUNDS`]).
+fn another_round(round: usize, repeat: u32, start: std::time::Instant) -> bool {
+    round < (repeat as usize).max(1)
+        || (round < MAX_TRACE_ROUNDS && start.elapsed().as_secs_f64() < TRACE_ROUND_BUDGET_S)
+}
+
 /// Measures every subject on one scene, on every ray set; the grids that walk packets also in
 /// `--tile` packets on the camera sets (a row of their own, family "grid packets").
 fn bench_scene(
@@ -254,9 +262,7 @@ fn bench_scene(
     // takes a few milliseconds, which one pause of the machine moves by 10–20%.
     let traces_start = std::time::Instant::now();
     let mut round = 0;
-    while round < (args.repeat as usize).max(1)
-        || (round < MAX_TRACE_ROUNDS && traces_start.elapsed().as_secs_f64() < TRACE_ROUND_BUDGET_S)
-    {
+    while another_round(round, args.repeat, traces_start) {
         for k in shuffled(built.len(), &mut rng) {
             let (subject, _, b) = &built[k];
             pb.set_message(format!("{} · {} (trace, round {})", sc.name, subject.name(), round + 1));
@@ -431,9 +437,7 @@ fn auto_check(sc: &LabScene, sets: &[RayBatch], args: &BenchArgs, cost: &CostMod
     let mut rng = gridrt_scene::rng::Rng::new(11);
     let start = std::time::Instant::now();
     let mut round = 0;
-    while round < (args.repeat as usize).max(1)
-        || (round < MAX_TRACE_ROUNDS && start.elapsed().as_secs_f64() < TRACE_ROUND_BUDGET_S)
-    {
+    while another_round(round, args.repeat, start) {
         for k in shuffled(points.len(), &mut rng) {
             let (_, _, g, best) = &mut points[k];
             let (s, _) = best_of(1, || g.trace_batch(&sc.tris, &rays, opts, true));
