@@ -15,6 +15,10 @@ mod limits;
 /// process exits with status 1 (usage errors: 2, from clap).
 #[cfg(not(target_arch = "wasm32"))]
 fn main() {
+    // Rust ignores SIGPIPE, so a write to a closed pipe (`gridrt render --json | head`) would
+    // panic with a backtrace; with the signal's default the process ends quietly instead.
+    #[cfg(unix)]
+    sigpipe::reset();
     if let Err(e) = run() {
         eprintln!("error: {}", one_line(&e));
         std::process::exit(1);
