@@ -305,6 +305,10 @@ pub struct GridArgs {
     /// twolevel: leaf-grid cells per triangle (λ₂).
     #[arg(long, default_value_t = TwoLevelOptions::default().leaf_density)]
     pub leaf_density: f64,
+    /// twolevel: a leaf grid under every non-empty top cell (Kalojanov et al.'s rule) instead of
+    /// where the cost model predicts it pays.
+    #[arg(long)]
+    pub every_top_cell: bool,
     /// Most cells a structure may have (all levels), whatever chose its resolution.
     #[arg(long, default_value_t = CostModel::default().max_cells, value_parser = parse_count)]
     pub max_cells: u64,

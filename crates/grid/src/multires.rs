@@ -26,7 +26,7 @@ use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
-use crate::build::bucket::bucket;
+use crate::build::bucket::{box_references, bucket};
 use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
@@ -122,6 +122,9 @@ struct Ctx<'a> {
     top_res: UVec3,
     /// Cells over all levels so far, kept or evaluated, held under `opts.cost.max_cells`.
     cells: std::sync::atomic::AtomicU64,
+    /// References of every sub-grid so far, kept or evaluated, held under
+    /// [`crate::build::MAX_REFS`] across the subtrees built in parallel.
+    refs: std::sync::atomic::AtomicU64,
 }
 
 impl Ctx<'_> {
@@ -174,14 +177,20 @@ impl Ctx<'_> {
         if used > self.opts.cost.max_cells {
             return Err(BuildError::TooManyCells { cells: used, limit: self.opts.cost.max_cells });
         }
-        let (cell_start, refs) = bucket(self.tris, Some(ids), &geom, self.insert, margin, None)?;
         let cost_based = !matches!(self.opts.policy, Policy::MaxDepth { .. }) && !self.opts.always_subdivide;
-        if cost_based {
-            let cells = geom.cell_count();
-            let m = self.opts.cost;
-            if m.cost(cells, refs.len() as u64, n) >= n as f64 * m.t_inter {
-                return Ok(None);
-            }
+        let m = self.opts.cost;
+        let rejected = |refs: u64| cost_based && m.cost(geom.cell_count(), refs, n) >= n as f64 * m.t_inter;
+        // Bounding-box insertion's references are counted from the boxes alone, so a sub-grid the
+        // cost test rejects is never bucketed: needles whose boxes fill the cell would land in
+        // every one of its cells (n times the cells, transiently).
+        if self.insert == InsertMode::BoundingBox && rejected(box_references(self.tris, ids, &geom, margin)) {
+            return Ok(None);
+        }
+        let (cell_start, refs) = bucket(self.tris, Some(ids), &geom, self.insert, margin, None)?;
+        let n_refs = refs.len() as u64;
+        crate::build::check_refs(self.refs.fetch_add(n_refs, std::sync::atomic::Ordering::Relaxed) + n_refs)?;
+        if rejected(n_refs) {
+            return Ok(None);
         }
         let mut sub = Subtree::default();
         sub.nodes.push(Node { res, first_cell: 0, depth, margin: margin as f32, scale });
@@ -226,7 +235,14 @@ pub fn build(
     let geom = GridGeometry::new(bounds, top_res);
     crate::build::check_cells(geom.res.to_array(), opts.cost.max_cells)?;
     let top = FlatGrid::build(tris, geom, build, times)?;
-    let ctx = Ctx { tris, opts, insert: build.insert, top_res: geom.res, cells: geom.cell_count().into() };
+    let ctx = Ctx {
+        tris,
+        opts,
+        insert: build.insert,
+        top_res: geom.res,
+        cells: geom.cell_count().into(),
+        refs: (top.refs.len() as u64).into(),
+    };
     let cells = geom.cell_count() as usize;
     let one = |i: usize| -> Result<Option<Subtree>, BuildError> {
         let c = UVec3::new(

@@ -377,8 +377,7 @@ fn build_on(
                 }
                 None => (None, None),
             };
-            let h =
-                crate::twolevel::build(tris, &bounds, top, cfg.twolevel, cfg.build, cfg.cost.max_cells, &mut times)?;
+            let h = crate::twolevel::build(tris, &bounds, top, cfg.twolevel, cfg.build, cfg.cost, &mut times)?;
             (AnyGrid::TwoLevel(h), choice)
         }
     };

@@ -1,10 +1,17 @@
-//! Two-level grids (Kalojanov, Billeter & Slusallek 2011): a top grid at low density, and every
+//! Two-level grids (Kalojanov, Billeter & Slusallek 2011): a top grid at low density, and a
 //! non-empty top cell its own leaf grid, with a resolution from its own triangle count.
 //!
-//! Defaults are theirs: top density λ₁ = 1/16 cells per triangle, leaf density λ₂ = 1.2. It is
-//! the multi-resolution structure with depth 1, adaptive leaf resolution and no cost test, so it
-//! shares its builder ([`crate::multires`]) and its compact layout and traversal
-//! ([`crate::hierarchy`]): top cell → leaf grid → leaf cell → reference range.
+//! Densities are theirs: top density λ₁ = 1/16 cells per triangle, leaf density λ₂ = 1.2. It is
+//! the multi-resolution structure with depth 1 and adaptive leaf resolution, so it shares its
+//! builder ([`crate::multires`]) and its compact layout and traversal ([`crate::hierarchy`]): top
+//! cell → leaf grid → leaf cell → reference range.
+//!
+//! Their rule gives every non-empty top cell a leaf grid ([`TwoLevelOptions::every_cell`]). By
+//! default the survey's cost test decides instead, as in the multi-resolution grid: a top cell
+//! keeps its triangle list when its leaf grid is predicted costlier than testing the list. With
+//! bounding-box insertion the every-cell rule grows with the square of a top cell's triangles
+//! when their boxes fill it (needles, hair, wires: each of n triangles lands in all of the leaf
+//! grid's ~λ₂·n cells), and the cost test rejects exactly those leaf grids.
 
 use glam::Vec3;
 use gridrt_scene::Aabb;
@@ -22,11 +29,15 @@ pub struct TwoLevelOptions {
     pub top_density: f64,
     /// Leaf-grid cells per triangle of each top cell (λ₂).
     pub leaf_density: f64,
+    /// Kalojanov et al.'s rule: a leaf grid under every non-empty top cell, without the cost
+    /// test (module doc).
+    #[serde(default)]
+    pub every_cell: bool,
 }
 
 impl Default for TwoLevelOptions {
     fn default() -> Self {
-        TwoLevelOptions { top_density: 1.0 / 16.0, leaf_density: 1.2 }
+        TwoLevelOptions { top_density: 1.0 / 16.0, leaf_density: 1.2, every_cell: false }
     }
 }
 
@@ -36,15 +47,16 @@ pub fn top_resolution(bounds: &Aabb, triangles: usize, opts: &TwoLevelOptions) -
     cubic_cells(bounds, opts.top_density * triangles as f64)
 }
 
-/// Builds a two-level grid over `bounds` (of `tris`); `top_res = None` uses [`top_resolution`]. `max_cells` bounds the
-/// cells of both levels together.
+/// Builds a two-level grid over `bounds` (of `tris`); `top_res = None` uses [`top_resolution`].
+/// `cost` is the cost model of the leaf grids' test; its `max_cells` bounds the cells of both
+/// levels together.
 pub fn build(
     tris: &[[Vec3; 3]],
     bounds: &Aabb,
     top_res: Option<[u32; 3]>,
     opts: TwoLevelOptions,
     build: BuildOptions,
-    max_cells: u64,
+    cost: CostModel,
     times: &mut PhaseTimes,
 ) -> Result<Hierarchy, BuildError> {
     let ok = |d: f64| d > 0.0 && d.is_finite();
@@ -59,8 +71,8 @@ pub fn build(
         policy: Policy::Adaptive,
         max_depth: 1,
         density: opts.leaf_density,
-        cost: CostModel { max_cells, ..CostModel::default() },
-        always_subdivide: true,
+        cost,
+        always_subdivide: opts.every_cell,
     };
     crate::multires::build(tris, bounds, top, m, build, times)
 }

@@ -75,7 +75,11 @@ impl GridArgs {
                 cost,
                 always_subdivide: false,
             },
-            twolevel: TwoLevelOptions { top_density: self.top_density, leaf_density: self.leaf_density },
+            twolevel: TwoLevelOptions {
+                top_density: self.top_density,
+                leaf_density: self.leaf_density,
+                every_cell: self.every_top_cell,
+            },
         })
     }
 }

@@ -174,6 +174,7 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
                     .logarithmic(true)
                     .text("lambda2 (leaf cells per triangle)"),
             );
+            ui.checkbox(&mut t.every_cell, "a leaf grid under every top cell (no cost test)");
         }
         _ => {}
     }

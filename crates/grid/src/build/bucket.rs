@@ -23,6 +23,20 @@ pub fn prefix_sum(counts: impl Iterator<Item = u32>, cells: usize) -> Result<Vec
     Ok(start)
 }
 
+/// The references bounding-box insertion of the triangles `ids` into `geom` makes (every cell of
+/// a triangle's box range), counted from the ranges alone without visiting a cell: the same
+/// count [`bucket`] reaches in [`InsertMode::BoundingBox`], and an upper bound on it in
+/// [`InsertMode::Exact`].
+pub fn box_references(tris: &[[Vec3; 3]], ids: &[u32], geom: &GridGeometry, margin: f64) -> u64 {
+    ids.iter()
+        .map(|&i| {
+            let g = prepare(geom, &tris[i as usize], margin);
+            let e = g.hi - g.lo + UVec3::ONE;
+            e.x as u64 * e.y as u64 * e.z as u64
+        })
+        .sum()
+}
+
 /// Buckets the triangles `ids` (or all of `tris` when `None`) into the cells of `geom`: the
 /// serial count → prefix sum → scatter of survey Algorithm 1. Returns `cell_start` (M + 1
 /// offsets) and the references, increasing within each cell. Used by the flat grid and by

@@ -441,3 +441,40 @@ fn ties_go_to_the_coarser_grid_within_the_basin() {
     assert_eq!(t3.best_sample(&none).unwrap().resolution[0], 4, "nothing buildable: the coarsest");
     assert!(t3.best_sample(&[]).is_none());
 }
+
+/// Needles (the slivers scene: long thin triangles whose boxes span much of the scene) in a
+/// two-level grid with bounding-box insertion: under Kalojanov et al.'s every-cell rule each of a
+/// top cell's n needles lands in all of its leaf grid's ~1.2·n cells, so the references grow
+/// with the square of n; the default cost test keeps those cells' lists instead. Both grids
+/// trace as brute force does.
+#[test]
+fn two_level_needles_stay_linear_under_the_cost_test() {
+    use gridrt_grid::trace::TraceOptions;
+    use gridrt_grid::twolevel::TwoLevelOptions;
+    use gridrt_grid::{GridConfig, GridKind, structure};
+
+    let generated = procedural::generate(SceneKind::Slivers, 3000, 5);
+    let tris = generated.mesh.triangles();
+    let rays = super::common::mixed_rays(&generated.mesh, &generated.inside_points, 4000, 11);
+    let (expected, _) = super::common::reference(&tris, &rays);
+    let refs = |every_cell: bool| {
+        let cfg = GridConfig {
+            kind: GridKind::TwoLevel,
+            twolevel: TwoLevelOptions { every_cell, ..TwoLevelOptions::default() },
+            ..GridConfig::default()
+        };
+        let (grid, report) = structure::build(&tris, &cfg).unwrap();
+        let (hits, _) = grid.trace_batch(&tris, &rays, TraceOptions { mailbox: true, ..Default::default() }, true);
+        super::common::assert_same_hits(
+            &format!("two-level needles, every cell {every_cell}"),
+            &rays,
+            &expected,
+            &hits,
+        );
+        report.stats.refs
+    };
+    let (tested, every) = (refs(false), refs(true));
+    println!("needles: {tested} references with the cost test, {every} with every cell subdivided");
+    assert!(tested < 100 * tris.len() as u64, "{tested} references for {} needles", tris.len());
+    assert!(every > 5 * tested, "the every-cell rule should blow up here: {every} against {tested}");
+}
