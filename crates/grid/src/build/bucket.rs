@@ -8,7 +8,7 @@ use web_time::Instant;
 use super::{PhaseTimes, check_refs, zeroed};
 use crate::BuildError;
 use crate::geometry::GridGeometry;
-use crate::insert::{InsertMode, for_each_cell, prepare};
+use crate::insert::{InsertMode, box_cell_range, for_each_cell, prepare};
 
 /// Exclusive prefix sum of per-cell counts into `cell_start` (M + 1 entries).
 pub fn prefix_sum(counts: impl Iterator<Item = u32>, cells: usize) -> Result<Vec<u32>, BuildError> {
@@ -30,8 +30,9 @@ pub fn prefix_sum(counts: impl Iterator<Item = u32>, cells: usize) -> Result<Vec
 pub fn box_references(tris: &[[Vec3; 3]], ids: &[u32], geom: &GridGeometry, margin: f64) -> u64 {
     ids.iter()
         .map(|&i| {
-            let g = prepare(geom, &tris[i as usize], margin);
-            let e = g.hi - g.lo + UVec3::ONE;
+            // `prepare`'s range, without the triangle in f64 that only exact insertion reads.
+            let [lo, hi] = box_cell_range(geom, &tris[i as usize], margin as f32);
+            let e = hi - lo + UVec3::ONE;
             e.x as u64 * e.y as u64 * e.z as u64
         })
         .sum()
