@@ -18,6 +18,18 @@
 //! candidate sub-grid. [`MultiresOptions::max_depth`] guards the recursion, and so does the
 //! f32 precision bound of [`crate::hierarchy::MAX_CHILD_MARGIN`].
 //!
+//! # A budget of references
+//! The cost test weighs the tests a ray saves, not the memory a sub-grid takes: 20,000 copies
+//! of one triangle across a cell pass it with 400 references per triangle (the tests per ray
+//! fall by a tenth), and 50,000 triangles sharing a vertex keep every level's middle cell as
+//! full as its parent, so the references multiply with depth (242M for 50k triangles). So a top
+//! cell's subtree holds at most [`SUBTREE_REFS_PER_TRIANGLE`] references per triangle of the
+//! cell: a sub-grid whose references exceed its budget stays a leaf, and its cells share the
+//! budget in proportion to their references. Deterministic (a subtree's budget depends on its
+//! own cells only), so the parallel build stays the serial one; on the shared scenes a
+//! sub-grid holds at most 24 references per triangle of its cell (multires) and 46 (two-level,
+//! box insertion), and none is over its budget.
+//!
 //! The build is deterministic; with `parallel` the subtrees of the top grid's cells are built
 //! on all threads and concatenated in cell order, bit-identical to the serial build.
 
@@ -26,7 +38,7 @@ use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
-use crate::build::bucket::{box_references, bucket};
+use crate::build::bucket::{box_references, bucket_within};
 use crate::build::{BuildOptions, PhaseTimes};
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
@@ -36,6 +48,10 @@ use crate::resolution::CostModel;
 
 /// Largest sub-grid resolution per axis.
 pub const MAX_SUB_RES: u32 = 64;
+
+/// References a top cell's subtree may hold per triangle of the cell (module doc: a budget of
+/// references).
+pub const SUBTREE_REFS_PER_TRIANGLE: f64 = 64.0;
 
 /// How sub-grid resolutions are chosen (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -143,7 +159,7 @@ impl Ctx<'_> {
     }
 
     /// Builds the subtree for cell `c` of `parent` holding triangles `ids`, or `None` to keep
-    /// it a leaf.
+    /// it a leaf. The subtree holds at most `budget` references (at least `ids.len()`).
     fn subdivide(
         &self,
         parent: &GridGeometry,
@@ -151,6 +167,7 @@ impl Ctx<'_> {
         c: UVec3,
         ids: &[u32],
         depth: u32,
+        budget: f64,
     ) -> Result<Option<Subtree>, BuildError> {
         let n = ids.len();
         if n == 0 || depth > self.opts.max_depth.min(MAX_DEPTH as u32 - 1) {
@@ -179,19 +196,28 @@ impl Ctx<'_> {
         }
         let cost_based = !matches!(self.opts.policy, Policy::MaxDepth { .. }) && !self.opts.always_subdivide;
         let m = self.opts.cost;
-        let rejected = |refs: u64| cost_based && m.cost(geom.cell_count(), refs, n) >= n as f64 * m.t_inter;
+        let rejected = |refs: u64| {
+            refs as f64 > budget || cost_based && m.cost(geom.cell_count(), refs, n) >= n as f64 * m.t_inter
+        };
         // Bounding-box insertion's references are counted from the boxes alone, so a sub-grid the
-        // cost test rejects is never bucketed: needles whose boxes fill the cell would land in
-        // every one of its cells (n times the cells, transiently).
+        // budget or the cost test rejects is never bucketed: needles whose boxes fill the cell
+        // would land in every one of its cells (n times the cells, transiently).
         if self.insert == InsertMode::BoundingBox && rejected(box_references(self.tris, ids, &geom, margin)) {
             return Ok(None);
         }
-        let (cell_start, refs) = bucket(self.tris, Some(ids), &geom, self.insert, margin, None)?;
+        let Some((cell_start, refs)) =
+            bucket_within(self.tris, Some(ids), &geom, self.insert, margin, budget as u64, None)?
+        else {
+            return Ok(None);
+        };
         let n_refs = refs.len() as u64;
         crate::build::check_refs(self.refs.fetch_add(n_refs, std::sync::atomic::Ordering::Relaxed) + n_refs)?;
         if rejected(n_refs) {
             return Ok(None);
         }
+        // Each cell's share of the budget, in proportion to its references (never below them:
+        // n_refs ≤ budget).
+        let per_ref = budget / n_refs.max(1) as f64;
         let mut sub = Subtree::default();
         sub.nodes.push(Node { res, first_cell: 0, depth, margin: margin as f32, scale });
         sub.cells = crate::build::zeroed(geom.cell_count() as usize, "sub-grid cells")?;
@@ -201,7 +227,8 @@ impl Ctx<'_> {
                     let cc = UVec3::new(x, y, z);
                     let i = geom.cell_index(cc);
                     let cell_ids = &refs[cell_start[i] as usize..cell_start[i + 1] as usize];
-                    match self.subdivide(&geom, scale, cc, cell_ids, depth + 1)? {
+                    let share = per_ref * cell_ids.len() as f64;
+                    match self.subdivide(&geom, scale, cc, cell_ids, depth + 1, share)? {
                         Some(child) => {
                             let k = sub.append(child);
                             sub.cells[i] = [k, CHILD];
@@ -250,7 +277,8 @@ pub fn build(
             (i as u32 / geom.res.x) % geom.res.y,
             i as u32 / (geom.res.x * geom.res.y),
         );
-        ctx.subdivide(&geom, Vec3::ONE, c, top.cell(i), 1)
+        let ids = top.cell(i);
+        ctx.subdivide(&geom, Vec3::ONE, c, ids, 1, SUBTREE_REFS_PER_TRIANGLE * ids.len() as f64)
     };
     let subtrees: Vec<Option<Subtree>> =
         times.record("subdivide", || -> Result<Vec<Option<Subtree>>, BuildError> {

@@ -48,8 +48,26 @@ pub fn bucket(
     geom: &GridGeometry,
     mode: InsertMode,
     margin: f64,
+    times: Option<&mut PhaseTimes>,
+) -> Result<Buckets, BuildError> {
+    let bucketed = bucket_within(tris, ids, geom, mode, margin, u64::MAX, times)?;
+    Ok(bucketed.expect("no reference limit"))
+}
+
+/// A bucketing's `cell_start` (M + 1 offsets) and references.
+pub type Buckets = (Vec<u32>, Vec<u32>);
+
+/// [`bucket`], or `None` without the scatter when the references would be more than `limit`
+/// (known after the count).
+pub fn bucket_within(
+    tris: &[[Vec3; 3]],
+    ids: Option<&[u32]>,
+    geom: &GridGeometry,
+    mode: InsertMode,
+    margin: f64,
+    limit: u64,
     mut times: Option<&mut PhaseTimes>,
-) -> Result<(Vec<u32>, Vec<u32>), BuildError> {
+) -> Result<Option<Buckets>, BuildError> {
     let cells = geom.cell_count() as usize;
     let n = ids.map_or(tris.len(), |v| v.len());
     let id = |k: usize| ids.map_or(k as u32, |v| v[k]);
@@ -76,6 +94,9 @@ pub fn bucket(
     let start = Instant::now();
     let cell_start = prefix_sum(counts.iter().copied(), cells)?;
     record("scan", start);
+    if cell_start[cells] as u64 > limit {
+        return Ok(None);
+    }
     let start = Instant::now();
     let mut cursor = counts;
     cursor.copy_from_slice(&cell_start[..cells]);
@@ -89,5 +110,5 @@ pub fn bucket(
         });
     }
     record("scatter", start);
-    Ok((cell_start, refs))
+    Ok(Some((cell_start, refs)))
 }

@@ -442,39 +442,89 @@ fn ties_go_to_the_coarser_grid_within_the_basin() {
     assert!(t3.best_sample(&[]).is_none());
 }
 
-/// Needles (the slivers scene: long thin triangles whose boxes span much of the scene) in a
-/// two-level grid with bounding-box insertion: under Kalojanov et al.'s every-cell rule each of a
-/// top cell's n needles lands in all of its leaf grid's ~1.2·n cells, so the references grow
-/// with the square of n; the default cost test keeps those cells' lists instead. Both grids
-/// trace as brute force does.
+/// Hierarchies over shapes whose sub-grids would multiply references: needles (the slivers
+/// scene: long thin triangles whose boxes span much of the scene), copies of one triangle, and a
+/// fan of triangles sharing a vertex. Without a bound, the two-level grid's every-cell rule put
+/// each of a top cell's n needles in all of its ~1.2·n leaf cells, the cost test accepted a
+/// sub-grid of 400 references per copy, and the fan's middle cells stayed as full as their
+/// parents at every depth. Every subtree now holds at most
+/// [`multires::SUBTREE_REFS_PER_TRIANGLE`] references per triangle of its top cell, so the
+/// hierarchy holds at most that many times the top grid's references; the default two-level
+/// grid subdivides fewer needle cells than the every-cell rule; and every grid traces as brute
+/// force does.
 #[test]
-fn two_level_needles_stay_linear_under_the_cost_test() {
+fn hierarchies_keep_their_references_within_the_budget() {
+    use gridrt_grid::multires::{self, MultiresOptions};
     use gridrt_grid::trace::TraceOptions;
     use gridrt_grid::twolevel::TwoLevelOptions;
     use gridrt_grid::{GridConfig, GridKind, structure};
 
-    let generated = procedural::generate(SceneKind::Slivers, 3000, 5);
-    let tris = generated.mesh.triangles();
-    let rays = super::common::mixed_rays(&generated.mesh, &generated.inside_points, 4000, 11);
-    let (expected, _) = super::common::reference(&tris, &rays);
-    let refs = |every_cell: bool| {
-        let cfg = GridConfig {
-            kind: GridKind::TwoLevel,
-            twolevel: TwoLevelOptions { every_cell, ..TwoLevelOptions::default() },
-            ..GridConfig::default()
+    let needles = procedural::generate(SceneKind::Slivers, 3000, 5);
+    let copies: Vec<[Vec3; 3]> = (0..2000)
+        .map(|_| [Vec3::ZERO, Vec3::X, Vec3::Y])
+        .chain((0..500).map(|i| {
+            let c = Vec3::new((i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32) * 0.1 + Vec3::splat(0.05);
+            [c, c + Vec3::new(0.01, 0.0, 0.0), c + Vec3::new(0.0, 0.01, 0.005)]
+        }))
+        .collect();
+    let fan: Vec<[Vec3; 3]> = (0..5000)
+        .map(|i| {
+            let a = |k: u32| {
+                let t = k as f32 / 5000.0 * std::f32::consts::TAU;
+                Vec3::new(t.cos(), t.sin(), 0.1 * (7.0 * t).sin())
+            };
+            [Vec3::ZERO, a(i), a(i + 1)]
+        })
+        .collect();
+    let rays_of = |tris: &[[Vec3; 3]], seed: u64| {
+        let mesh = gridrt_scene::Mesh {
+            positions: tris.iter().flatten().copied().collect(),
+            indices: (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
         };
-        let (grid, report) = structure::build(&tris, &cfg).unwrap();
-        let (hits, _) = grid.trace_batch(&tris, &rays, TraceOptions { mailbox: true, ..Default::default() }, true);
-        super::common::assert_same_hits(
-            &format!("two-level needles, every cell {every_cell}"),
-            &rays,
-            &expected,
-            &hits,
-        );
-        report.stats.refs
+        super::common::mixed_rays(&mesh, &[], 3000, seed)
     };
-    let (tested, every) = (refs(false), refs(true));
-    println!("needles: {tested} references with the cost test, {every} with every cell subdivided");
-    assert!(tested < 100 * tris.len() as u64, "{tested} references for {} needles", tris.len());
-    assert!(every > 5 * tested, "the every-cell rule should blow up here: {every} against {tested}");
+    let scenes = [
+        ("needles", needles.mesh.triangles(), rays_of(&needles.mesh.triangles(), 11)),
+        ("copies", copies.clone(), rays_of(&copies, 12)),
+        ("fan", fan.clone(), rays_of(&fan, 13)),
+    ];
+    for (name, tris, rays) in &scenes {
+        let (expected, _) = super::common::reference(tris, rays);
+        for insert in InsertMode::ALL {
+            let mut twolevel_nodes = Vec::new();
+            for (kind, every_cell) in
+                [(GridKind::Multires, false), (GridKind::TwoLevel, false), (GridKind::TwoLevel, true)]
+            {
+                let cfg = GridConfig {
+                    kind,
+                    build: BuildOptions { insert, parallel: true },
+                    twolevel: TwoLevelOptions { every_cell, ..TwoLevelOptions::default() },
+                    multires: MultiresOptions::default(),
+                    ..GridConfig::default()
+                };
+                let (grid, report) = structure::build(tris, &cfg).unwrap();
+                let what = format!("{name} {kind} {insert:?} every cell {every_cell}");
+                let (hits, _) =
+                    grid.trace_batch(tris, rays, TraceOptions { mailbox: true, ..Default::default() }, true);
+                super::common::assert_same_hits(&what, rays, &expected, &hits);
+                let top = report.stats.resolution;
+                let (flat, _, _) = build_flat(
+                    tris,
+                    Resolution::Explicit(top),
+                    &CostModel::default(),
+                    BuildOptions { insert, parallel: true },
+                )
+                .unwrap();
+                let bound = multires::SUBTREE_REFS_PER_TRIANGLE * flat.refs.len() as f64;
+                println!("{what}: {} references, {} nodes, bound {bound}", report.stats.refs, report.stats.nodes);
+                assert!(report.stats.refs as f64 <= bound, "{what}: {} references", report.stats.refs);
+                if kind == GridKind::TwoLevel {
+                    twolevel_nodes.push(report.stats.nodes);
+                }
+            }
+            if *name == "needles" && insert == InsertMode::BoundingBox {
+                assert!(twolevel_nodes[0] < twolevel_nodes[1], "{name}: nodes {twolevel_nodes:?}");
+            }
+        }
+    }
 }
