@@ -130,6 +130,12 @@ impl Hierarchy {
         Ok(Hierarchy { geom, nodes, cells, refs: out })
     }
 
+    /// A hierarchy from its compact arrays as [`Hierarchy::from_pairs`] lays them out (the
+    /// multires build writes them directly).
+    pub(crate) fn from_parts(geom: GridGeometry, nodes: Vec<Node>, cells: Vec<u32>, refs: Vec<u32>) -> Hierarchy {
+        Hierarchy { geom, nodes, cells, refs }
+    }
+
     /// What cell `i` (an index into `cells`, node offset included) holds.
     #[inline]
     pub fn cell(&self, i: usize) -> Cell {

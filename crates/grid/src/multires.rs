@@ -291,30 +291,107 @@ pub fn build(
         })?;
     let total: u64 = subtrees.iter().flatten().map(|s| s.refs.len() as u64).sum::<u64>() + top.refs.len() as u64;
     crate::build::check_refs(total)?;
-    let h = times.record("assemble", || {
-        let mut root = Subtree::default();
-        root.nodes.push(Node {
-            res: geom.res,
-            first_cell: 0,
-            depth: 0,
-            margin: crate::geometry::INSERT_MARGIN_CELLS as f32,
-            scale: Vec3::ONE,
-        });
-        root.cells = vec![[0, 0]; cells]; // within the cell limit, checked above
-        for (i, sub) in subtrees.into_iter().enumerate() {
-            match sub {
-                Some(s) => {
-                    let k = root.append(s);
-                    root.cells[i] = [k, CHILD];
-                }
-                None => {
-                    let ids = top.cell(i);
-                    root.cells[i] = [root.refs.len() as u32, ids.len() as u32];
-                    root.refs.extend_from_slice(ids);
-                }
+    let parallel = build.parallel;
+    let h = times.record("assemble", || assemble(geom, &top, &subtrees, parallel))?;
+    Ok(h)
+}
+
+/// The hierarchy's compact arrays ([`Hierarchy::from_pairs`]'s layout) written straight from the
+/// top grid and its cells' subtrees: the top node, then each subtree's nodes in top-cell order;
+/// the top grid's cells, then each subtree's; each cell's entries (a child's node index, or a
+/// leaf's references) in the same order. Each subtree's part of the arrays is known from the
+/// sizes before it, so the subtrees are written on all threads with `parallel`, and the result
+/// is the serial one.
+fn assemble(
+    geom: GridGeometry,
+    top: &FlatGrid,
+    subtrees: &[Option<Subtree>],
+    parallel: bool,
+) -> Result<Hierarchy, BuildError> {
+    use crate::hierarchy::CHILD_BIT;
+    let top_cells = subtrees.len();
+    let entries_of =
+        |sub: &Subtree| -> u64 { sub.cells.iter().map(|&[_, b]| if b == CHILD { 1 } else { b as u64 }).sum() };
+    let top_entries: u64 =
+        (0..top_cells).map(|i| if subtrees[i].is_some() { 1 } else { top.cell(i).len() as u64 }).sum();
+    let sub_entries: Vec<u64> = subtrees.iter().flatten().map(entries_of).collect();
+    let entries = top_entries + sub_entries.iter().sum::<u64>();
+    if entries >= CHILD_BIT as u64 {
+        return Err(BuildError::TooManyReferences { refs: entries, limit: CHILD_BIT as u64 - 1 });
+    }
+    let pair_count = top_cells + subtrees.iter().flatten().map(|s| s.cells.len()).sum::<usize>();
+    let mut nodes = Vec::with_capacity(1 + subtrees.iter().flatten().map(|s| s.nodes.len()).sum::<usize>());
+    nodes.push(Node {
+        res: geom.res,
+        first_cell: 0,
+        depth: 0,
+        margin: crate::geometry::INSERT_MARGIN_CELLS as f32,
+        scale: Vec3::ONE,
+    });
+    // Each subtree's first node, first cell and first entry.
+    let mut bases = Vec::with_capacity(sub_entries.len());
+    let (mut cell_base, mut entry_base) = (top_cells as u32, top_entries as u32);
+    for (sub, &e) in subtrees.iter().flatten().zip(&sub_entries) {
+        let node_base = nodes.len() as u32;
+        nodes.extend(sub.nodes.iter().map(|n| Node { first_cell: n.first_cell + cell_base, ..*n }));
+        bases.push((node_base, entry_base));
+        cell_base += sub.cells.len() as u32;
+        entry_base += e as u32;
+    }
+    let mut cells = crate::build::zeroed::<u32>(pair_count + 1, "hierarchy cells")?;
+    let mut out = crate::build::zeroed::<u32>(entries as usize, "hierarchy references")?;
+    // The top grid's cells.
+    let (top_part, mut cells_rest) = cells.split_at_mut(top_cells);
+    let (top_out, mut out_rest) = out.split_at_mut(top_entries as usize);
+    let (mut at, mut k) = (0usize, 0usize);
+    for (i, (cell, sub)) in top_part.iter_mut().zip(subtrees).enumerate() {
+        if sub.is_some() {
+            *cell = at as u32 | CHILD_BIT;
+            top_out[at] = bases[k].0;
+            at += 1;
+            k += 1;
+        } else {
+            let ids = top.cell(i);
+            *cell = at as u32;
+            top_out[at..at + ids.len()].copy_from_slice(ids);
+            at += ids.len();
+        }
+    }
+    // Each subtree's cells and entries, in parts of their own.
+    let mut parts = Vec::with_capacity(bases.len());
+    for ((sub, &e), &(node_base, entry_base)) in subtrees.iter().flatten().zip(&sub_entries).zip(&bases) {
+        let (c, rest) = std::mem::take(&mut cells_rest).split_at_mut(sub.cells.len());
+        cells_rest = rest;
+        let (o, rest) = std::mem::take(&mut out_rest).split_at_mut(e as usize);
+        out_rest = rest;
+        parts.push((sub, c, o, node_base, entry_base));
+    }
+    let write = |(sub, c, o, node_base, entry_base): (&Subtree, &mut [u32], &mut [u32], u32, u32)| {
+        let mut at = 0usize;
+        for (cell, &[a, b]) in c.iter_mut().zip(&sub.cells) {
+            if b == CHILD {
+                *cell = (entry_base + at as u32) | CHILD_BIT;
+                o[at] = node_base + a;
+                at += 1;
+            } else {
+                *cell = entry_base + at as u32;
+                o[at..at + b as usize].copy_from_slice(&sub.refs[a as usize..(a + b) as usize]);
+                at += b as usize;
             }
         }
-        Hierarchy::from_pairs(geom, root.nodes, &root.cells, &root.refs)
-    })?;
-    Ok(h)
+    };
+    #[cfg(feature = "parallel")]
+    if parallel {
+        use rayon::prelude::*;
+        parts.into_par_iter().for_each(write);
+    } else {
+        parts.into_iter().for_each(write);
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        let _ = parallel;
+        parts.into_iter().for_each(write);
+    }
+    cells[pair_count] = entries as u32;
+    Ok(Hierarchy::from_parts(geom, nodes, cells, out))
 }
