@@ -45,7 +45,7 @@ use crate::trace::closest_hit::closest_hit;
 use crate::traversal::{Traversal, walk_counted};
 
 /// The builders' cell pairs: `[node, CHILD]` marks an internal cell, `[start, count]` a leaf
-/// (see [`Hierarchy::from_pairs`]).
+/// (`multires::assemble` lays them out compactly: [`Hierarchy::from_parts`]).
 pub const CHILD: u32 = u32::MAX;
 /// Set in a cell's entry of [`Hierarchy::cells`] when the cell is a child grid.
 pub const CHILD_BIT: u32 = 1 << 31;
@@ -100,38 +100,10 @@ pub fn child_margin(top_res: UVec3, scale: Vec3, geom: &GridGeometry, depth: u32
 }
 
 impl Hierarchy {
-    /// The hierarchy of the builders' `pairs` (per cell, `[start, count]` of a leaf in `refs` or
-    /// `[node, CHILD]`), laid out compactly: leaf ranges and child indices copied into one
-    /// array in cell order.
-    pub fn from_pairs(
-        geom: GridGeometry,
-        nodes: Vec<Node>,
-        pairs: &[[u32; 2]],
-        refs: &[u32],
-    ) -> Result<Hierarchy, crate::BuildError> {
-        let entries: u64 = pairs.iter().map(|&[_, b]| if b == CHILD { 1 } else { b as u64 }).sum();
-        if entries >= CHILD_BIT as u64 {
-            return Err(crate::BuildError::TooManyReferences { refs: entries, limit: CHILD_BIT as u64 - 1 });
-        }
-        let mut cells = crate::build::zeroed::<u32>(pairs.len() + 1, "hierarchy cells")?;
-        let mut out = Vec::new();
-        out.try_reserve_exact(entries as usize)
-            .map_err(|_| crate::BuildError::OutOfMemory { what: "hierarchy references", bytes: entries * 4 })?;
-        for (cell, &[a, b]) in cells.iter_mut().zip(pairs) {
-            if b == CHILD {
-                *cell = out.len() as u32 | CHILD_BIT;
-                out.push(a);
-            } else {
-                *cell = out.len() as u32;
-                out.extend_from_slice(&refs[a as usize..(a + b) as usize]);
-            }
-        }
-        cells[pairs.len()] = out.len() as u32;
-        Ok(Hierarchy { geom, nodes, cells, refs: out })
-    }
-
-    /// A hierarchy from its compact arrays as [`Hierarchy::from_pairs`] lays them out (the
-    /// multires build writes them directly).
+    /// A hierarchy from its compact arrays (the multires build writes them,
+    /// `multires::assemble`): per cell in node order an offset into `refs`, with [`CHILD_BIT`]
+    /// set for a child grid, and one more offset at the end; at a leaf's offset its references,
+    /// at a child's its node index.
     pub(crate) fn from_parts(geom: GridGeometry, nodes: Vec<Node>, cells: Vec<u32>, refs: Vec<u32>) -> Hierarchy {
         Hierarchy { geom, nodes, cells, refs }
     }

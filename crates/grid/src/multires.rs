@@ -39,7 +39,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
 use crate::build::bucket::{box_references, bucket_within};
-use crate::build::{BuildOptions, PhaseTimes};
+use crate::build::{BuildOptions, PhaseTimes, split_lengths};
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
 use crate::hierarchy::{CHILD, Hierarchy, MAX_CHILD_MARGIN, MAX_DEPTH, Node, cell_geometry, child_margin};
@@ -196,14 +196,16 @@ impl Ctx<'_> {
         }
         let cost_based = !matches!(self.opts.policy, Policy::MaxDepth { .. }) && !self.opts.always_subdivide;
         let m = self.opts.cost;
-        let rejected = |refs: u64| {
-            refs as f64 > budget || cost_based && m.cost(geom.cell_count(), refs, n) >= n as f64 * m.t_inter
-        };
+        let costlier = |refs: u64| cost_based && m.cost(geom.cell_count(), refs, n) >= n as f64 * m.t_inter;
         // Bounding-box insertion's references are counted from the boxes alone, so a sub-grid the
         // budget or the cost test rejects is never bucketed: needles whose boxes fill the cell
-        // would land in every one of its cells (n times the cells, transiently).
-        if self.insert == InsertMode::BoundingBox && rejected(box_references(self.tris, ids, &geom, margin)) {
-            return Ok(None);
+        // would land in every one of its cells (n times the cells, transiently). Exact insertion's
+        // are known after the count: `bucket_within` stops there when they are over the budget.
+        if self.insert == InsertMode::BoundingBox {
+            let box_refs = box_references(self.tris, ids, &geom, margin);
+            if box_refs as f64 > budget || costlier(box_refs) {
+                return Ok(None);
+            }
         }
         let Some((cell_start, refs)) =
             bucket_within(self.tris, Some(ids), &geom, self.insert, margin, budget as u64, None)?
@@ -212,7 +214,7 @@ impl Ctx<'_> {
         };
         let n_refs = refs.len() as u64;
         crate::build::check_refs(self.refs.fetch_add(n_refs, std::sync::atomic::Ordering::Relaxed) + n_refs)?;
-        if rejected(n_refs) {
+        if self.insert == InsertMode::Exact && costlier(n_refs) {
             return Ok(None);
         }
         // Each cell's share of the budget, in proportion to its references (never below them:
@@ -296,7 +298,7 @@ pub fn build(
     Ok(h)
 }
 
-/// The hierarchy's compact arrays ([`Hierarchy::from_pairs`]'s layout) written straight from the
+/// The hierarchy's compact arrays ([`Hierarchy::from_parts`]) written straight from the
 /// top grid and its cells' subtrees: the top node, then each subtree's nodes in top-cell order;
 /// the top grid's cells, then each subtree's; each cell's entries (a child's node index, or a
 /// leaf's references) in the same order. Each subtree's part of the arrays is known from the
@@ -341,8 +343,8 @@ fn assemble(
     let mut cells = crate::build::zeroed::<u32>(pair_count + 1, "hierarchy cells")?;
     let mut out = crate::build::zeroed::<u32>(entries as usize, "hierarchy references")?;
     // The top grid's cells.
-    let (top_part, mut cells_rest) = cells.split_at_mut(top_cells);
-    let (top_out, mut out_rest) = out.split_at_mut(top_entries as usize);
+    let (top_part, cells_rest) = cells.split_at_mut(top_cells);
+    let (top_out, out_rest) = out.split_at_mut(top_entries as usize);
     let (mut at, mut k) = (0usize, 0usize);
     for (i, (cell, sub)) in top_part.iter_mut().zip(subtrees).enumerate() {
         if sub.is_some() {
@@ -358,14 +360,16 @@ fn assemble(
         }
     }
     // Each subtree's cells and entries, in parts of their own.
-    let mut parts = Vec::with_capacity(bases.len());
-    for ((sub, &e), &(node_base, entry_base)) in subtrees.iter().flatten().zip(&sub_entries).zip(&bases) {
-        let (c, rest) = std::mem::take(&mut cells_rest).split_at_mut(sub.cells.len());
-        cells_rest = rest;
-        let (o, rest) = std::mem::take(&mut out_rest).split_at_mut(e as usize);
-        out_rest = rest;
-        parts.push((sub, c, o, node_base, entry_base));
-    }
+    let cell_parts = split_lengths(cells_rest, subtrees.iter().flatten().map(|s| s.cells.len()));
+    let out_parts = split_lengths(out_rest, sub_entries.iter().map(|&e| e as usize));
+    let parts: Vec<_> = subtrees
+        .iter()
+        .flatten()
+        .zip(cell_parts)
+        .zip(out_parts)
+        .zip(&bases)
+        .map(|(((sub, c), o), &(node_base, entry_base))| (sub, c, o, node_base, entry_base))
+        .collect();
     let write = |(sub, c, o, node_base, entry_base): (&Subtree, &mut [u32], &mut [u32], u32, u32)| {
         let mut at = 0usize;
         for (cell, &[a, b]) in c.iter_mut().zip(&sub.cells) {
