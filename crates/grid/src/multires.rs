@@ -96,7 +96,8 @@ pub struct MultiresOptions {
     /// Cells per triangle of an adaptive sub-grid.
     pub density: f64,
     pub cost: CostModel,
-    /// Subdivide every non-empty cell, skipping the cost test (the two-level grid does this).
+    /// Subdivide every non-empty cell, skipping the cost test (the two-level grid with
+    /// [`crate::twolevel::TwoLevelOptions::every_cell`]).
     pub always_subdivide: bool,
 }
 

@@ -17,7 +17,7 @@ fn kind_blurb(kind: GridKind) -> &'static str {
         GridKind::Flat => "uniform grid, resolution from the cost model",
         GridKind::Macrocell => "uniform grid plus coarse occupancy cells that skip empty space",
         GridKind::Multires => "cells that hold many triangles get their own sub-grid",
-        GridKind::TwoLevel => "Kalojanov's two-level grid: a sub-grid in every non-empty top cell",
+        GridKind::TwoLevel => "Kalojanov's two-level grid: a leaf grid in each top cell where it pays",
         GridKind::Proximity => "empty cells store the distance to the nearest full cell; rays jump",
     }
 }
