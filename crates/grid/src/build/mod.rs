@@ -86,7 +86,8 @@ pub fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
 }
 
 /// `v` holding `n` default values, written on all threads into the memory it already has
-/// (more only when it is too small), or [`BuildError::OutOfMemory`].
+/// (more only when it is too small, see [`reserve_for_rebuild`]), or
+/// [`BuildError::OutOfMemory`].
 #[cfg(feature = "parallel")]
 pub fn refill_par<T: Copy + Default + Send + Sync>(
     v: &mut Vec<T>,
@@ -95,9 +96,7 @@ pub fn refill_par<T: Copy + Default + Send + Sync>(
 ) -> Result<(), BuildError> {
     use rayon::prelude::*;
     v.clear();
-    v.try_reserve_exact(n)
-        .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
-    advise_huge_pages(v);
+    reserve_for_rebuild(v, n, what)?;
     // Below 256 KiB the threads' hand-over costs more than the writes.
     if n * size_of::<T>() < 1 << 18 {
         v.resize(n, T::default());
@@ -108,8 +107,8 @@ pub fn refill_par<T: Copy + Default + Send + Sync>(
 }
 
 /// `v` of length `n` for a caller that overwrites every entry: a previous build's array is cut
-/// to length without being written (a rebuild every frame skips a pass over its references),
-/// else [`refill_par`].
+/// to length, or lengthened within its capacity, writing only the entries it did not have (a
+/// rebuild every frame skips a pass over its references); else [`refill_par`].
 #[cfg(feature = "parallel")]
 pub fn resize_for_overwrite<T: Copy + Default + Send + Sync>(
     v: &mut Vec<T>,
@@ -120,7 +119,33 @@ pub fn resize_for_overwrite<T: Copy + Default + Send + Sync>(
         v.truncate(n);
         return Ok(());
     }
+    if v.capacity() >= n {
+        v.resize(n, T::default());
+        return Ok(());
+    }
     refill_par(v, n, what)
+}
+
+/// Makes room for `n` entries in the emptied `v`. A fresh array gets exactly `n`; a previous
+/// build's array that is too small is replaced, not grown (growing copies its old contents,
+/// which the caller overwrites anyway), by one with an eighth more room: a scene rebuilt every
+/// frame whose reference count creeps up then does not get a new array, and its page faults,
+/// every frame.
+#[cfg(feature = "parallel")]
+fn reserve_for_rebuild<T>(v: &mut Vec<T>, n: usize, what: &'static str) -> Result<(), BuildError> {
+    debug_assert!(v.is_empty());
+    if v.capacity() >= n {
+        return Ok(());
+    }
+    let room = if v.capacity() == 0 { n } else { n.saturating_add(n / 8) };
+    let mut fresh = Vec::new();
+    fresh
+        .try_reserve_exact(room)
+        .or_else(|_| fresh.try_reserve_exact(n))
+        .map_err(|_| BuildError::OutOfMemory { what, bytes: (n as u64).saturating_mul(size_of::<T>() as u64) })?;
+    advise_huge_pages(&fresh);
+    *v = fresh;
+    Ok(())
 }
 
 /// Arrays from this size up ask for transparent huge pages.
