@@ -413,9 +413,44 @@ fn sampled(i: usize, stride: usize) -> bool {
 
 /// Strata of the sampled triangles by their widest extent at the coarsest resolution, in cells
 /// with the margins: narrower than one cell ("small"), than four ("medium"); wider ones are
-/// always counted exactly.
+/// always counted exactly. Whole runs of mid-size triangles make a third stratum,
+/// [`MEDIUM_RUNS`].
 const STRATUM_WIDTH: [f32; 2] = [1.0, 4.0];
-const STRATA: usize = STRATUM_WIDTH.len();
+/// The stratum of the runs of [`COUNT_CHUNK`] triangles that are all narrower than four cells
+/// but not all narrower than one ([`RunClass::Medium`]): such a run is read only for its
+/// sample, so guess-and-check over a mesh of mid-size triangles (a scan, a terrain, crowded
+/// particles) reads a sample, not the scene.
+const MEDIUM_RUNS: usize = STRATUM_WIDTH.len();
+const STRATA: usize = STRATUM_WIDTH.len() + 1;
+
+/// A run of [`COUNT_CHUNK`] triangles by its widest extent at the coarsest resolution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RunClass {
+    /// Every triangle surely narrower than a cell (all in the "small" stratum).
+    Small,
+    /// Every triangle surely narrower than four cells, so none "large": the run is the
+    /// [`MEDIUM_RUNS`] stratum's.
+    Medium,
+    /// Some triangle may be four cells wide or more: its triangles are taken one by one.
+    Wide,
+}
+
+impl RunClass {
+    /// The class of a run whose widest extent is `widest` at cells of size `1 / inv_cell`, with
+    /// the margins and [`WIDEST_SLACK_CELLS`]: a triangle's width in [`count_refs_curve`] is
+    /// measured from the grid's corner, which rounds differently from the run's `max − min`.
+    fn of(widest: Vec3, inv_cell: Vec3) -> RunClass {
+        let e =
+            (widest * inv_cell).max_element() * (1.0 + 1e-5) + WIDEST_SLACK_CELLS + 2.0 * INSERT_MARGIN_CELLS as f32;
+        if e < STRATUM_WIDTH[0] {
+            RunClass::Small
+        } else if e < STRATUM_WIDTH[1] {
+            RunClass::Medium
+        } else {
+            RunClass::Wide
+        }
+    }
+}
 
 /// Partial sums of one pass of [`count_refs_curve`].
 struct Tally {
@@ -456,8 +491,10 @@ impl Tally {
 /// strata) is counted only if it falls in a hashed 1-in-k sample, and each
 /// stratum's sample mean stands in for the rest of it (the others cost a bounding box and a
 /// comparison); every wider ("large") triangle is always counted exactly, so the few big
-/// triangles that dominate N_m in architectural scenes never depend on the sample. Returns the
-/// counts and how many triangles were counted.
+/// triangles that dominate N_m in architectural scenes never depend on the sample. A run of
+/// [`COUNT_CHUNK`] triangles that holds no large triangle and not only small ones is a stratum
+/// of its own ([`MEDIUM_RUNS`], with every such run), whose triangles are not classified one by
+/// one: only its sample is read. Returns the counts and how many triangles were counted.
 ///
 /// Bounding-box counts come from the box alone; exact insertion runs the overlap test per
 /// candidate cell (the same as the build), so for it the sample is what keeps guess-and-check
@@ -469,7 +506,9 @@ pub fn count_refs_curve(
     mode: InsertMode,
     parallel: bool,
 ) -> (Vec<u64>, usize) {
-    count_refs_curve_with(tris, bounds, None, resolutions, mode, parallel)
+    // The runs' widest extents decide the strata: computed here as the bounds pass would.
+    let extents = (tris.len() > EXACT_COUNT_LIMIT).then(|| crate::triangle_bounds_and_extents(tris, parallel).1);
+    count_refs_curve_with(tris, bounds, extents.as_ref(), resolutions, mode, parallel)
 }
 
 /// Triangles per run of the bounds pass's [`ChunkExtents`] and of [`count_refs_curve`]'s work.
@@ -487,10 +526,12 @@ pub struct ChunkExtents(pub Vec<Vec3>);
 /// most a few ulps of the scene's extent (under 2·10⁻⁴ cells at 1024 cells an axis).
 const WIDEST_SLACK_CELLS: f32 = 1e-3;
 
-/// [`count_refs_curve`] with the bounds pass's [`ChunkExtents`]: the same counts, but a run of
+/// [`count_refs_curve`] with the bounds pass's [`ChunkExtents`] (the same counts): a run of
 /// triangles all narrower than a cell at the coarsest resolution (all in the "small" stratum,
-/// which is sampled) is not read but for its sampled triangles. On meshes of many small
-/// triangles guess-and-check then reads a sample, not the scene.
+/// which is sampled), or of [`MEDIUM_RUNS`], is not read but for its sampled triangles. On
+/// meshes of many small or mid-size triangles guess-and-check then reads a sample, not the
+/// scene. Without extents (or with extents of other runs) above [`EXACT_COUNT_LIMIT`]
+/// triangles, they are computed first.
 pub fn count_refs_curve_with(
     tris: &[[Vec3; 3]],
     bounds: &Aabb,
@@ -499,33 +540,33 @@ pub fn count_refs_curve_with(
     mode: InsertMode,
     parallel: bool,
 ) -> (Vec<u64>, usize) {
-    let extents = extents.map(|e| &e.0[..]).filter(|e| e.len() == tris.len().div_ceil(COUNT_CHUNK));
-    // Without a run to skip, the counting loop compiled without the skipping (the branch alone
-    // made it 1.4× slower on the 2.4M particles, none of whose runs is skipped).
-    match extents {
-        Some(e) if !resolutions.is_empty() && tris.len() > EXACT_COUNT_LIMIT => {
-            let inv_cell = GridGeometry::new(bounds, resolutions[0]).inv_cell;
-            if e.iter().any(|w| all_narrower_than_a_cell(*w, inv_cell)) {
-                return count_curve::<true>(tris, bounds, Some(e), resolutions, mode, parallel);
-            }
-            count_curve::<false>(tris, bounds, None, resolutions, mode, parallel)
-        }
-        _ => count_curve::<false>(tris, bounds, None, resolutions, mode, parallel),
+    if resolutions.is_empty() || tris.len() <= EXACT_COUNT_LIMIT {
+        return count_curve::<false>(tris, bounds, &[], resolutions, mode, parallel);
     }
+    let computed;
+    let extents = match extents.filter(|e| e.0.len() == tris.len().div_ceil(COUNT_CHUNK)) {
+        Some(e) => &e.0,
+        None => {
+            computed = crate::triangle_bounds_and_extents(tris, parallel).1;
+            &computed.0
+        }
+    };
+    let inv_cell = GridGeometry::new(bounds, resolutions[0]).inv_cell;
+    let classes: Vec<RunClass> = extents.iter().map(|w| RunClass::of(*w, inv_cell)).collect();
+    // Without a run to skip, the counting loop compiled without the skipping (the branch alone
+    // made it 1.4× slower on the 2.4M particles when none of their runs was skipped).
+    if classes.iter().any(|&c| c != RunClass::Wide) {
+        return count_curve::<true>(tris, bounds, &classes, resolutions, mode, parallel);
+    }
+    count_curve::<false>(tris, bounds, &classes, resolutions, mode, parallel)
 }
 
-/// Whether every triangle of a run whose widest extent is `widest` is surely narrower than a
-/// cell of size `1 / inv_cell` with the margins (the "small" stratum of [`count_refs_curve`]).
-fn all_narrower_than_a_cell(widest: Vec3, inv_cell: Vec3) -> bool {
-    let e = (widest * inv_cell).max_element() * (1.0 + 1e-5) + WIDEST_SLACK_CELLS + 2.0 * INSERT_MARGIN_CELLS as f32;
-    e < STRATUM_WIDTH[0]
-}
-
-/// [`count_refs_curve_with`]; `SKIP`: runs of small triangles are read only for their sample.
+/// [`count_refs_curve_with`]; `SKIP`: runs of small triangles and [`MEDIUM_RUNS`] (by
+/// `classes`, one per run) are read only for their sample.
 fn count_curve<const SKIP: bool>(
     tris: &[[Vec3; 3]],
     bounds: &Aabb,
-    extents: Option<&[Vec3]>,
+    classes: &[RunClass],
     resolutions: &[[u32; 3]],
     mode: InsertMode,
     parallel: bool,
@@ -556,11 +597,8 @@ fn count_curve<const SKIP: bool>(
         let e = ((hi - lo) * grids[0].inv_cell).max_element() + 2.0 * INSERT_MARGIN_CELLS as f32;
         STRATUM_WIDTH.iter().position(|&w| e < w)
     };
-    // Whether every triangle of run `i` is surely in the small stratum.
-    let all_small = |i: usize| {
-        SKIP && stride > 1
-            && extents.and_then(|e| e.get(i)).is_some_and(|w| all_narrower_than_a_cell(*w, grids[0].inv_cell))
-    };
+    // Run `i`'s class, where runs are classed (above the exact-count limit).
+    let class = |i: usize| if stride > 1 { classes.get(i).copied().unwrap_or(RunClass::Wide) } else { RunClass::Wide };
     // `exact[s]`: stratum s is counted exactly (all of it) rather than sampled; `large`: the
     // large triangles are counted.
     let tally = |exact: [bool; STRATA], large: bool, base: usize, part: &[[Vec3; 3]]| {
@@ -595,18 +633,38 @@ fn count_curve<const SKIP: bool>(
             if !SKIP {
                 return tally(exact, large, i * CHUNK, p);
             }
-            let skipped = !exact[0] && all_small(i);
-            let picked: Vec<[Vec3; 3]> = if skipped {
-                (0..p.len()).filter(|&j| sampled(i * CHUNK + j, stride)).map(|j| p[j]).collect()
-            } else {
-                Vec::new()
-            };
-            let (ex, base, part) = if skipped { ([true, exact[1]], 0, &picked[..]) } else { (exact, i * CHUNK, p) };
-            let mut t = tally(ex, large, base, part);
-            if skipped {
-                t.members[0] += (p.len() - picked.len()) as u64;
+            let pick = || (0..p.len()).filter(|&j| sampled(i * CHUNK + j, stride)).map(|j| p[j]).collect::<Vec<_>>();
+            match class(i) {
+                RunClass::Small if !exact[0] => {
+                    let picked = pick();
+                    let mut ex = exact;
+                    ex[0] = true;
+                    let mut t = tally(ex, large, 0, &picked);
+                    t.members[0] += (p.len() - picked.len()) as u64;
+                    t
+                }
+                // A run of the medium-run stratum: its sample (or all of it, when the stratum
+                // is counted exactly), never classified triangle by triangle.
+                RunClass::Medium => {
+                    let mut t = Tally::new(k);
+                    let picked;
+                    let part = if exact[MEDIUM_RUNS] {
+                        p
+                    } else {
+                        picked = pick();
+                        &picked[..]
+                    };
+                    for tri in part {
+                        let lo = tri[0].min(tri[1]).min(tri[2]) - min;
+                        let hi = tri[0].max(tri[1]).max(tri[2]) - min;
+                        count(tri, lo, hi, &mut t.sampled[MEDIUM_RUNS]);
+                    }
+                    t.members[MEDIUM_RUNS] = p.len() as u64;
+                    t.counted[MEDIUM_RUNS] = part.len() as u64;
+                    t
+                }
+                _ => tally(exact, large, i * CHUNK, p),
             }
-            t
         };
         #[cfg(feature = "parallel")]
         if parallel {
