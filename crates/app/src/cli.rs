@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use gridrt_grid::cell_plane::CellPlanes;
 use gridrt_grid::multires::{MultiresOptions, Policy};
 use gridrt_grid::twolevel::TwoLevelOptions;
 use gridrt_grid::{CostModel, GridKind, Resolution, Traversal};
@@ -309,12 +310,21 @@ pub struct GridArgs {
     /// where the cost model predicts it pays.
     #[arg(long)]
     pub every_top_cell: bool,
+    /// Cell slabs, which skip an occupied cell whose slab the ray passes (auto: macrocell grids
+    /// and exact-insertion flat grids whose references mostly lie in cells of 6 or more; on:
+    /// every flat and macrocell grid; off: none).
+    #[arg(long, default_value = "auto", value_parser = parse_cell_planes)]
+    pub cell_planes: CellPlanes,
     /// Most cells a structure may have (all levels), whatever chose its resolution.
     #[arg(long, default_value_t = CostModel::default().max_cells, value_parser = parse_count)]
     pub max_cells: u64,
 }
 
 fn parse_grid(s: &str) -> Result<GridKind, String> {
+    s.parse()
+}
+
+fn parse_cell_planes(s: &str) -> Result<CellPlanes, String> {
     s.parse()
 }
 

@@ -509,7 +509,7 @@ impl GridBuilder {
             )
             .await?
         };
-        let fine = FlatGrid { geom: grid.geom, occupied, ref_start, refs };
+        let fine = FlatGrid { geom: grid.geom, occupied, ref_start, refs, planes: Vec::new() };
         Ok(match (grid.macrocells, &grid.structure.extra) {
             (Some((a, macro_res)), Some(bits)) => {
                 let words = bits.size() / WORD;

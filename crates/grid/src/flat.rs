@@ -9,11 +9,12 @@
 //! [`crate::build::parallel`] (bit-identical): references in a cell are in increasing triangle
 //! order.
 
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
 use crate::build::{BuildOptions, BuildScratch, PhaseTimes, bucket};
+use crate::cell_plane::{CellPlane, CellRay};
 use crate::geometry::{GridGeometry, INSERT_MARGIN_CELLS};
 use crate::stats::StructureStats;
 use crate::trace::closest_hit::ClosestHit;
@@ -55,6 +56,10 @@ pub struct FlatGrid {
     /// holds `refs.len()`.
     pub ref_start: Vec<u32>,
     pub refs: Vec<u32>,
+    /// Per occupied cell, in the order of `ref_start`, the slab that holds its triangles
+    /// ([`crate::cell_plane`]); empty when the grid has none.
+    #[serde(default)]
+    pub planes: Vec<CellPlane>,
 }
 
 impl FlatGrid {
@@ -66,7 +71,7 @@ impl FlatGrid {
         ref_start: Vec<u32>,
         refs: Vec<u32>,
     ) -> FlatGrid {
-        FlatGrid { geom, occupied, ref_start, refs }
+        FlatGrid { geom, occupied, ref_start, refs, planes: Vec::new() }
     }
 
     /// The grid of `geom` with cell `c` owning `refs[cell_start[c]..cell_start[c + 1]]` (the
@@ -122,7 +127,7 @@ impl FlatGrid {
         for (c, part) in parts.into_iter().enumerate() {
             gather(c * CHUNK, &occupied[c * CHUNK..((c + 1) * CHUNK).min(words)], part);
         }
-        FlatGrid { geom, occupied, ref_start, refs }
+        FlatGrid { geom, occupied, ref_start, refs, planes: Vec::new() }
     }
 
     /// The table of M + 1 offsets the builds produce (cell `c` owns
@@ -196,8 +201,62 @@ impl FlatGrid {
         search.test_cell(self.refs_of(index), t_exit)
     }
 
+    /// [`FlatGrid::visit`] of cell `c` (index `index`) along `ray` (the search's ray in this
+    /// grid's space, when the grid has slabs): an occupied cell whose slab the ray's segment
+    /// misses is passed as an empty one ([`crate::cell_plane`]).
+    #[inline(always)]
+    pub fn visit_at(
+        &self,
+        search: &mut ClosestHit,
+        ray: Option<&CellRay>,
+        c: UVec3,
+        index: usize,
+        t_exit: f32,
+    ) -> bool {
+        if !self.is_occupied(index) {
+            return search.done_at(t_exit);
+        }
+        self.test_occupied_at(search, ray, c, index, t_exit)
+    }
+
+    /// [`FlatGrid::test_occupied`] with the slab check of [`FlatGrid::visit_at`].
+    #[inline(never)]
+    pub(crate) fn test_occupied_at(
+        &self,
+        search: &mut ClosestHit,
+        ray: Option<&CellRay>,
+        c: UVec3,
+        index: usize,
+        t_exit: f32,
+    ) -> bool {
+        let j = self.rank(index);
+        let refs = &self.refs[self.ref_start[j] as usize..self.ref_start[j + 1] as usize];
+        if self.slab_misses(ray, j, c, t_exit) {
+            return search.done_at(t_exit);
+        }
+        search.test_cell(refs, t_exit)
+    }
+
+    /// Whether the occupied cell of rank `j` (cell `c`) has a slab that `ray`'s segment in it,
+    /// up to `t_exit`, misses.
+    #[inline(always)]
+    pub(crate) fn slab_misses(&self, ray: Option<&CellRay>, j: usize, c: UVec3, t_exit: f32) -> bool {
+        match (ray, self.planes.get(j)) {
+            (Some(r), Some(p)) if p.lo > f32::NEG_INFINITY => p.misses(r, c, t_exit),
+            _ => false,
+        }
+    }
+
+    /// The search's ray in this grid's space for the slab checks, when the grid has slabs.
+    #[inline(always)]
+    pub fn cell_ray(&self, ray: &crate::geometry::GridRay) -> Option<CellRay> {
+        (!self.planes.is_empty()).then(|| CellRay::new(ray))
+    }
+
     pub fn memory_bytes(&self) -> u64 {
-        (self.ref_start.len() + self.refs.len()) as u64 * 4 + (self.occupied.len() * size_of::<OccupancyWord>()) as u64
+        (self.ref_start.len() + self.refs.len()) as u64 * 4
+            + (self.occupied.len() * size_of::<OccupancyWord>()) as u64
+            + (self.planes.len() * size_of::<CellPlane>()) as u64
     }
 
     /// Size figures of the grid alone (one level).

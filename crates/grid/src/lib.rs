@@ -9,6 +9,7 @@
 
 pub mod brute;
 pub mod build;
+pub mod cell_plane;
 pub mod coherent;
 pub mod flat;
 pub mod geometry;

@@ -28,6 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::BuildError;
 use crate::build::{BuildOptions, PhaseTimes};
+use crate::cell_plane::CellRay;
 use crate::flat::{FlatGrid, WORD_CELLS};
 use crate::geometry::{GridGeometry, GridRay, linear_index};
 use crate::stats::RayStats;
@@ -130,22 +131,27 @@ impl MacrocellGrid {
         if traversal == Traversal::AmanatidesWoo {
             return closest_hit(tris, ray, opts, |search| {
                 let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
+                let cr = self.fine.cell_ray(&fine_ray);
                 let walk = AmanatidesWoo::new(&fine_ray, self.fine.geom.res);
                 let empty = |m: UVec3| !self.occupied(m);
-                let (_, cells) =
-                    walk.walk_blocks(self.log2_edge(), empty, |c, index, t_exit| self.visit(search, c, index, t_exit));
+                let (_, cells) = walk.walk_blocks(self.log2_edge(), empty, |c, index, t_exit| {
+                    self.visit(search, cr.as_ref(), c, index, t_exit)
+                });
                 search.visit_cells(cells);
             });
         }
         closest_hit(tris, ray, opts, |search| {
             let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
+            let cr = self.fine.cell_ray(&fine_ray);
             let macro_ray = self.macro_ray(&fine_ray);
             let mut t_enter = fine_ray.t0;
             let (_, cells) = walk_counted(traversal, &macro_ray, self.macro_res, |m, maddr, m_exit| {
                 // An occupied macrocell's fine walk is a call, keeping the macro walk's loop
                 // small (most macrocells are empty).
                 let entered = std::mem::replace(&mut t_enter, m_exit);
-                if self.occupied_at(maddr) && self.walk_block(m, &fine_ray, entered, m_exit, traversal, search) {
+                if self.occupied_at(maddr)
+                    && self.walk_block(m, &fine_ray, cr.as_ref(), (entered, m_exit), traversal, search)
+                {
                     return true;
                 }
                 search.done_at(m_exit)
@@ -154,12 +160,13 @@ impl MacrocellGrid {
         })
     }
 
-    /// A fine cell's visit in the walk over macrocells: its tests when it holds triangles, a
-    /// jump out of its macrocell when that is empty.
+    /// A fine cell's visit in the walk over macrocells: its tests when it holds triangles (unless
+    /// `ray`'s segment misses its slab, [`crate::cell_plane`]), a jump out of its macrocell when
+    /// that is empty.
     #[inline]
-    pub fn visit(&self, search: &mut ClosestHit, c: UVec3, index: usize, t_exit: f32) -> Visit {
+    pub fn visit(&self, search: &mut ClosestHit, ray: Option<&CellRay>, c: UVec3, index: usize, t_exit: f32) -> Visit {
         if self.fine.is_occupied(index) {
-            if self.fine.test_occupied(search, index, t_exit) {
+            if self.fine.test_occupied_at(search, ray, c, index, t_exit) {
                 return Visit::Stop;
             }
         } else if !self.occupied(c >> self.log2_edge()) {
@@ -198,22 +205,22 @@ impl MacrocellGrid {
         UVec3::splat(self.a).min(self.fine.geom.res - lo)
     }
 
-    /// Walks the fine cells of macrocell `m` along `fine_ray` over `[t0, t1]`; true when the
-    /// search is done.
+    /// Walks the fine cells of macrocell `m` along `fine_ray` over `[t0, t1]` (with the slab
+    /// checks of `cell_ray`, the ray in the fine grid's space); true when the search is done.
     #[inline(never)]
     fn walk_block(
         &self,
         m: UVec3,
         fine_ray: &GridRay,
-        t0: f32,
-        t1: f32,
+        cell_ray: Option<&CellRay>,
+        (t0, t1): (f32, f32),
         traversal: Traversal,
         search: &mut ClosestHit,
     ) -> bool {
         let (lo, sub) = self.block_ray(m, fine_ray, t0, t1);
         let fine = &self.fine;
         let (done, cells) = walk_counted(traversal, &sub, self.block_res(lo), |c, _, t_exit| {
-            fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
+            fine.visit_at(search, cell_ray, lo + c, fine.geom.cell_index(lo + c), t_exit)
         });
         search.visit_cells(cells);
         done

@@ -6,10 +6,12 @@ use gridrt_scene::{Hit, Ray};
 use serde::{Deserialize, Serialize};
 
 use crate::build::{BuildOptions, BuildScratch, PhaseTimes};
+use crate::cell_plane::{self, CellPlanes};
 use crate::coherent::{self, PacketOptions, PacketStats};
 use crate::flat::FlatGrid;
 use crate::geometry::GridGeometry;
 use crate::hierarchy::Hierarchy;
+use crate::insert::InsertMode;
 use crate::macrocell::{MacroSample, MacrocellGrid};
 use crate::multires::MultiresOptions;
 use crate::proximity::ProximityGrid;
@@ -84,6 +86,9 @@ pub struct GridConfig {
     pub macro_size: Option<u32>,
     pub multires: MultiresOptions,
     pub twolevel: TwoLevelOptions,
+    /// Which flat and macrocell grids get cell slabs ([`crate::cell_plane`]).
+    #[serde(default)]
+    pub cell_planes: CellPlanes,
 }
 
 impl Default for GridConfig {
@@ -96,6 +101,7 @@ impl Default for GridConfig {
             macro_size: None,
             multires: MultiresOptions::default(),
             twolevel: TwoLevelOptions::default(),
+            cell_planes: CellPlanes::Auto,
         }
     }
 }
@@ -318,6 +324,14 @@ fn build_with(
     build_on(tris, cfg, scratch)
 }
 
+/// Gives `grid` its cell slabs when `cfg.cell_planes` wants them (`eligible`: its kind and
+/// insertion qualify under [`CellPlanes::Auto`]), timed as the "planes" phase.
+fn add_planes(grid: &mut FlatGrid, tris: &[[Vec3; 3]], cfg: &GridConfig, eligible: bool, times: &mut PhaseTimes) {
+    if cell_plane::wanted(grid, cfg.cell_planes, eligible) {
+        grid.planes = times.record("planes", || cell_plane::planes_of(grid, tris, cfg.cell_planes, cfg.build.parallel));
+    }
+}
+
 fn build_on(
     tris: &[[Vec3; 3]],
     cfg: &GridConfig,
@@ -346,6 +360,8 @@ fn build_on(
                 None => FlatGrid::build(tris, geom, cfg.build, &mut times)?,
             };
             let grid = if cfg.kind == GridKind::Flat {
+                let mut g = g;
+                add_planes(&mut g, tris, cfg, cfg.build.insert == InsertMode::Exact, &mut times);
                 AnyGrid::Flat(g)
             } else {
                 AnyGrid::Proximity(times.record("distance", || ProximityGrid::new(g)))
@@ -354,8 +370,9 @@ fn build_on(
         }
         GridKind::Macrocell => {
             let choice = choose(&mut times, cfg.resolution.unwrap_or(Resolution::Auto))?;
-            let (g, samples) =
+            let (mut g, samples) =
                 MacrocellGrid::build(tris, &bounds, choice.resolution, cfg.macro_size, cfg.build, &mut times)?;
+            add_planes(&mut g.fine, tris, cfg, true, &mut times);
             macro_samples = samples;
             (AnyGrid::Macrocell(g), Some(choice))
         }

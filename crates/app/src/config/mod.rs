@@ -80,6 +80,7 @@ impl GridArgs {
                 leaf_density: self.leaf_density,
                 every_cell: self.every_top_cell,
             },
+            cell_planes: self.cell_planes,
         })
     }
 }

@@ -14,11 +14,12 @@
 //! [`crate::traversal::walk`]), the same [`ClosestHit`] tests and stopping rule, so the hits
 //! and the stats are the same bit for bit.
 
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 use gridrt_scene::{Hit, Ray};
 
 use super::closest_hit::{ClosestHit, prefetch};
 use super::{TraceOptions, trace_each, trace_flat};
+use crate::cell_plane::CellRay;
 use crate::flat::FlatGrid;
 use crate::geometry::GridRay;
 use crate::macrocell::MacrocellGrid;
@@ -120,8 +121,8 @@ pub fn trace_chunk<G: Interleave>(
 enum Stage {
     /// Walking: the next cells until an occupied one (empty cells cost a bit test).
     Walk,
-    /// At an occupied cell (its entry of `ref_start` asked for) left at `t_exit`.
-    Offset { entry: usize, t_exit: f32 },
+    /// At occupied cell `cell` (its entry of `ref_start` asked for) left at `t_exit`.
+    Offset { cell: UVec3, entry: usize, t_exit: f32 },
     /// Its references `start..end` asked for.
     Refs { start: usize, end: usize, t_exit: f32 },
     /// Its triangles asked for: test them.
@@ -133,10 +134,13 @@ enum Stage {
 pub trait CellWalk {
     /// The flat grid whose cells the walk visits.
     fn cells(&self) -> &FlatGrid;
-    /// Walks on to the next occupied cell: its index and the `t` where the ray leaves it, or
-    /// `None` when the walk ended or `search` is done in an empty cell. Every visited cell is
-    /// counted in `cells`, as the single-ray walk counts it.
-    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)>;
+    /// The ray in that grid's space for its cells' slab checks ([`crate::cell_plane`]), as
+    /// the single-ray walk checks them.
+    fn cell_ray(&self) -> Option<&CellRay>;
+    /// Walks on to the next occupied cell: the cell, its index and the `t` where the ray leaves
+    /// it, or `None` when the walk ended or `search` is done in an empty cell. Every visited
+    /// cell is counted in `cells`, as the single-ray walk counts it.
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(UVec3, usize, f32)>;
 }
 
 /// The cells of `walk` in `grid` up to the next occupied one (see [`CellWalk::next_occupied`]).
@@ -146,11 +150,11 @@ fn next_occupied_of(
     grid: &FlatGrid,
     search: &ClosestHit,
     cells: &mut u32,
-) -> Option<Option<(usize, f32)>> {
-    while let Some((_, index, t_exit)) = walk.next_cell() {
+) -> Option<Option<(UVec3, usize, f32)>> {
+    while let Some((cell, index, t_exit)) = walk.next_cell() {
         *cells += 1;
         if grid.is_occupied(index) {
-            return Some(Some((index, t_exit)));
+            return Some(Some((cell, index, t_exit)));
         }
         if search.done_at(t_exit) {
             return Some(None);
@@ -165,13 +169,14 @@ fn next_occupied_of(
 pub struct FlatWalk<'g> {
     grid: &'g FlatGrid,
     walk: LinearWalk,
+    cell_ray: Option<CellRay>,
 }
 
 impl<'g> FlatWalk<'g> {
     /// The walk of `search`'s ray through `grid`, or `None` when the ray misses the grid.
     pub fn new(grid: &'g FlatGrid, search: &ClosestHit) -> Option<FlatWalk<'g>> {
         let gr = grid.geom.clip(&search.ray)?;
-        Some(FlatWalk { grid, walk: AmanatidesWoo::new(&gr, grid.geom.res).linear() })
+        Some(FlatWalk { grid, walk: AmanatidesWoo::new(&gr, grid.geom.res).linear(), cell_ray: grid.cell_ray(&gr) })
     }
 }
 
@@ -180,8 +185,12 @@ impl CellWalk for FlatWalk<'_> {
         self.grid
     }
 
+    fn cell_ray(&self) -> Option<&CellRay> {
+        self.cell_ray.as_ref()
+    }
+
     #[inline]
-    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(UVec3, usize, f32)> {
         next_occupied_of(&mut self.walk, self.grid, search, cells).flatten()
     }
 }
@@ -192,13 +201,18 @@ impl CellWalk for FlatWalk<'_> {
 pub struct MacrocellWalk<'g> {
     grid: &'g MacrocellGrid,
     walk: LinearWalk,
+    cell_ray: Option<CellRay>,
 }
 
 impl<'g> MacrocellWalk<'g> {
     /// The walk of `search`'s ray through `grid`, or `None` when the ray misses the grid.
     pub fn new(grid: &'g MacrocellGrid, search: &ClosestHit) -> Option<MacrocellWalk<'g>> {
         let fine_ray = grid.fine.geom.clip(&search.ray)?;
-        Some(MacrocellWalk { grid, walk: AmanatidesWoo::new(&fine_ray, grid.fine.geom.res).linear() })
+        Some(MacrocellWalk {
+            grid,
+            walk: AmanatidesWoo::new(&fine_ray, grid.fine.geom.res).linear(),
+            cell_ray: grid.fine.cell_ray(&fine_ray),
+        })
     }
 }
 
@@ -207,8 +221,12 @@ impl CellWalk for MacrocellWalk<'_> {
         &self.grid.fine
     }
 
+    fn cell_ray(&self) -> Option<&CellRay> {
+        self.cell_ray.as_ref()
+    }
+
     #[inline]
-    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(UVec3, usize, f32)> {
         let (grid, log2) = (self.grid, self.grid.log2_edge());
         loop {
             // The single-ray walk's visit ([`MacrocellGrid::visit`]), counted alike.
@@ -220,10 +238,10 @@ impl CellWalk for MacrocellWalk<'_> {
                 }
                 continue;
             }
-            let (_, addr, t_exit) = self.walk.next_cell()?;
+            let (cell, addr, t_exit) = self.walk.next_cell()?;
             *cells += 1;
             if grid.fine.is_occupied(addr) {
-                return Some((addr, t_exit));
+                return Some((cell, addr, t_exit));
             }
             if search.done_at(t_exit) {
                 return None;
@@ -255,8 +273,13 @@ impl CellWalk for ProximityWalk<'_> {
         &self.grid.grid
     }
 
+    /// The proximity grid's cells are tested without slab checks, as its single-ray walk does.
+    fn cell_ray(&self) -> Option<&CellRay> {
+        None
+    }
+
     #[inline]
-    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(usize, f32)> {
+    fn next_occupied(&mut self, search: &ClosestHit, cells: &mut u32) -> Option<(UVec3, usize, f32)> {
         loop {
             let (cell, idx, t_exit) = self.walk.next_cell()?;
             *cells += 1;
@@ -271,7 +294,7 @@ impl CellWalk for ProximityWalk<'_> {
                         return None;
                     }
                 }
-                Jump::Step { empty: false } => return Some((idx, t_exit)),
+                Jump::Step { empty: false } => return Some((cell, idx, t_exit)),
             }
         }
     }
@@ -293,15 +316,28 @@ impl<W: CellWalk> Slot<'_, W> {
     fn turn(&mut self) -> Option<(Hit, RayStats)> {
         match self.stage {
             Stage::Walk => {
-                let Some((index, t_exit)) = self.walk.next_occupied(&self.search, &mut self.cells) else {
+                let Some((cell, index, t_exit)) = self.walk.next_occupied(&self.search, &mut self.cells) else {
                     return Some(self.finish());
                 };
-                let entry = self.walk.cells().rank(index);
-                prefetch(&self.walk.cells().ref_start, entry);
-                self.stage = Stage::Offset { entry, t_exit };
-            }
-            Stage::Offset { entry, t_exit } => {
                 let grid = self.walk.cells();
+                let entry = grid.rank(index);
+                prefetch(&grid.ref_start, entry);
+                if self.walk.cell_ray().is_some() {
+                    prefetch(&grid.planes, entry);
+                }
+                self.stage = Stage::Offset { cell, entry, t_exit };
+            }
+            Stage::Offset { cell, entry, t_exit } => {
+                let grid = self.walk.cells();
+                // A cell whose slab the segment misses is passed as an empty one, as the
+                // single-ray walk passes it.
+                if grid.slab_misses(self.walk.cell_ray(), entry, cell, t_exit) {
+                    if self.search.done_at(t_exit) {
+                        return Some(self.finish());
+                    }
+                    self.stage = Stage::Walk;
+                    return None;
+                }
                 let (start, end) = (grid.ref_start[entry] as usize, grid.ref_start[entry + 1] as usize);
                 prefetch(&grid.refs, start);
                 self.stage = Stage::Refs { start, end, t_exit };

@@ -50,8 +50,10 @@ impl TraceOptions {
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
     closest_hit(tris, ray, opts, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
-        let (_, cells) =
-            walk_counted(opts.traversal, &gr, grid.geom.res, |_, index, t_exit| grid.visit(search, index, t_exit));
+        let cr = grid.cell_ray(&gr);
+        let (_, cells) = walk_counted(opts.traversal, &gr, grid.geom.res, |c, index, t_exit| {
+            grid.visit_at(search, cr.as_ref(), c, index, t_exit)
+        });
         search.visit_cells(cells);
     })
 }

@@ -232,3 +232,72 @@ fn interleaved_walks_equal_single_rays_and_brute_force() {
         }
     }
 }
+
+/// Cell slabs (`gridrt_grid::cell_plane`) skip cells, never hits: with a slab on every cell
+/// that has one (`CellPlanes::On`), the flat and macrocell grids equal brute force for every
+/// traversal × insertion × mailbox, closest and any hit (segments ending one ulp before, at and
+/// after each hit: the slab check of the cell a segment ends in), single rays and interleaved
+/// walks alike; each slab holds its cell's triangles; and the slabs spare tests.
+#[test]
+fn cell_slabs_skip_tests_never_hits() {
+    use gridrt_grid::cell_plane::{CellPlane, CellPlanes};
+    use gridrt_grid::trace::interleaved::trace_grid_interleaved;
+    let mut spared = 0.0f64;
+    for (name, g) in procedural_scenes() {
+        let tris = g.mesh.triangles();
+        let rays = mixed_rays(&g.mesh, &g.inside_points, matrix_rays(20_000), 29);
+        let (expected, _) = reference(&tris, &rays);
+        let segments = segments_around_hits(&rays, &expected);
+        let (expected_any, _) = reference(&tris, &segments);
+        for kind in [GridKind::Flat, GridKind::Macrocell] {
+            for insert in InsertMode::ALL {
+                let build = BuildOptions { insert, parallel: true };
+                let with = GridConfig { kind, build, cell_planes: CellPlanes::On, ..GridConfig::default() };
+                let without = GridConfig { cell_planes: CellPlanes::Off, ..with };
+                let (grid, _) = structure::build(&tris, &with).unwrap();
+                let (plain, _) = structure::build(&tris, &without).unwrap();
+                let fine = match &grid {
+                    AnyGrid::Flat(f) => f,
+                    AnyGrid::Macrocell(m) => &m.fine,
+                    _ => unreachable!(),
+                };
+                assert_eq!(fine.planes.len() + 1, fine.ref_start.len(), "{name} {kind} {insert:?}: a slab per cell");
+                // Every corner of every triangle of a cell lies in its slab (grid space, f64).
+                let (min, inv) = (fine.geom.min.as_dvec3(), fine.geom.inv_cell.as_dvec3());
+                for (j, p) in fine.planes.iter().enumerate().filter(|(_, p)| **p != CellPlane::NONE) {
+                    let n = glam::Vec3::from_array(p.n).as_dvec3();
+                    for &t in &fine.refs[fine.ref_start[j] as usize..fine.ref_start[j + 1] as usize] {
+                        for c in tris[t as usize] {
+                            let d = n.dot((c.as_dvec3() - min) * inv);
+                            assert!(d >= p.lo as f64 && d <= p.hi as f64, "{name} {kind} {insert:?}: cell {j}");
+                        }
+                    }
+                }
+                for traversal in Traversal::EXACT {
+                    for mailbox in [false, true] {
+                        let opts = TraceOptions { traversal, mailbox, ..Default::default() };
+                        let what = format!("{name} {kind} {insert:?} {traversal} mailbox={mailbox}, slabs");
+                        let (hits, stats) = grid.trace_batch(&tris, &rays, opts, true);
+                        assert_same_hits(&what, &rays, &expected, &hits);
+                        let (any, _) = grid.trace_batch(&tris, &segments, opts.occlusion(), true);
+                        assert_same_occlusion(&what, &tris, &segments, &expected_any, &any);
+                        if traversal == Traversal::AmanatidesWoo {
+                            let (_, base) = plain.trace_batch(&tris, &rays, opts, true);
+                            assert!(stats.tests <= base.tests, "{what}: more tests with slabs");
+                            spared = spared.max(1.0 - stats.tests as f64 / base.tests.max(1) as f64);
+                            let mut inter = vec![gridrt_scene::Hit::MISS; rays.len()];
+                            let istats = match &grid {
+                                AnyGrid::Flat(f) => trace_grid_interleaved(f, &tris, &rays, &mut inter, opts),
+                                AnyGrid::Macrocell(m) => trace_grid_interleaved(m, &tris, &rays, &mut inter, opts),
+                                _ => unreachable!(),
+                            };
+                            assert_eq!(istats, stats, "{what}: interleaved stats");
+                            assert!(inter.iter().zip(&hits).all(|(a, b)| a.same_bits(b)), "{what}: interleaved hits");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(spared > 0.2, "the slabs spared at most {:.0}% of the tests", spared * 100.0);
+}

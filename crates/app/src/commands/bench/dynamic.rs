@@ -14,6 +14,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use gridrt_grid::cell_plane::CellPlanes;
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{CostModel, GridConfig, GridKind, PacketOptions, structure};
 use gridrt_scene::{Hit, LoadLimits, Ray};
@@ -302,7 +303,17 @@ fn bench_scene(
                 Strategy::Grid(kind) | Strategy::GridPackets(kind) => Built::Grid(
                     structure::build_reusing(
                         tris,
-                        &GridConfig { kind, cost: *cost, ..GridConfig::default() },
+                        &GridConfig {
+                            kind,
+                            cost: *cost,
+                            // Packets do not read cell slabs: none are built for them.
+                            cell_planes: if matches!(strategy, Strategy::GridPackets(_)) {
+                                CellPlanes::Off
+                            } else {
+                                CellPlanes::Auto
+                            },
+                            ..GridConfig::default()
+                        },
                         &mut scratches[s],
                     )?
                     .0,
