@@ -4,6 +4,7 @@
 
 use eframe::egui::{self, Color32, Sense, Vec2};
 use gridrt_gpu::View;
+use gridrt_grid::cell_plane::CellPlanes;
 use gridrt_grid::multires::Policy;
 use gridrt_grid::{GridKind, InsertMode, Resolution, Traversal};
 
@@ -116,6 +117,18 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
         ui.radio_value(&mut g.build.insert, InsertMode::Exact, "exact (SAT)");
     });
     ui.checkbox(&mut g.build.parallel, "parallel build");
+    if matches!(g.kind, GridKind::Flat | GridKind::Macrocell) {
+        ui.horizontal(|ui| {
+            for (v, label) in [(CellPlanes::Auto, "auto"), (CellPlanes::On, "on"), (CellPlanes::Off, "off")] {
+                ui.radio_value(&mut g.cell_planes, v, label);
+            }
+            ui.label("cell slabs").on_hover_text(
+                "A slab per occupied cell that holds its triangles: a CPU ray whose segment in \
+                 the cell misses it skips the cell's tests (the same hits). Auto: macrocell and \
+                 exact-insertion flat grids of scanned or CAD meshes; not read by packets or the GPU.",
+            );
+        });
+    }
     let buildable = gridrt_gpu::build::GridBuilder::supports(g);
     ui.checkbox(&mut s.gpu_build, "build on the GPU").on_hover_text(
         "Flat and macrocell grids (box or exact insertion) are built by WGSL kernels on this \
