@@ -92,12 +92,13 @@ fn overlap_test_f64(t: ptr<function, OverlapTest>) {
         let k = (*t).ks[n];
         let a = overlap_axis_vector(&e, k);
         // A box axis' dot products are the corners' coordinates and its radius is h, exactly
-        // (products with 1 and 0, sums with zeros), so they are taken as such; the plane's
-        // interval is the single value n·v0.
+        // (products with 1 and 0, sums with zeros), so they are taken as such; every axis, the
+        // normal too, takes its interval from all three corners (a nearly collinear triangle's
+        // normal is rounding noise, not perpendicular to its edges).
         let box_axis = k < 3u;
         var lo: F64;
         var hi: F64;
-        for (var j = 0u; j < select(3u, 1u, k == 12u); j++) {
+        for (var j = 0u; j < 3u; j++) {
             var p: F64;
             if box_axis {
                 p = vs[j][k];
@@ -165,14 +166,10 @@ fn overlap_test_new(v: array<D3, 3>, h: F64) -> OverlapTest {
             a = cross(e32[0], e32[1]);
             bound = l1(e32[0]) * l1(e32[1]);
         }
-        var lo = 0.0;
-        var hi = 0.0;
-        if k < 12u {
-            let p1 = dot(a, c1);
-            let p2 = dot(a, c2);
-            lo = min(0.0, min(p1, p2));
-            hi = max(0.0, max(p1, p2));
-        }
+        let p1 = dot(a, c1);
+        let p2 = dot(a, c2);
+        let lo = min(0.0, min(p1, p2));
+        let hi = max(0.0, max(p1, p2));
         t.ks[n] = k;
         t.axes32[n] = vec4<f32>(a, h32 * l1(a));
         t.bounds32[n] = vec3<f32>(lo, hi, l1(a) + bound);

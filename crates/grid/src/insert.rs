@@ -277,11 +277,15 @@ impl OverlapTest {
                 n += 1;
             }
         }
-        // The plane: the cube's center within its projected radius of the plane (a degenerate
-        // triangle's zero normal never separates).
+        // The plane: the cube within its projected radius of the corners' projections (a
+        // degenerate triangle's zero normal never separates). All three corners, not the first
+        // alone: for a triangle whose corners are (nearly) collinear the computed normal is
+        // rounding noise, not perpendicular to the edges, and the first corner's plane missed
+        // the far end of the segment (found by a differential fuzz: a lattice triangle with its
+        // third corner at the midpoint of the others, hit at an end, was left out of its cells).
         let normal = e[0].cross(e[1]);
-        let d = normal.dot(v[0]);
-        axes[n] = (normal, d, d, radius(normal));
+        let p = [normal.dot(v[0]), normal.dot(v[1]), normal.dot(v[2])];
+        axes[n] = (normal, p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]), radius(normal));
         n += 1;
         OverlapTest { lo: v[0].min(v[1]).min(v[2]), hi: v[0].max(v[1]).max(v[2]), h, axes, n }
     }

@@ -87,3 +87,61 @@ fn triangles_far_outside_the_rest() {
     m.append(&procedural::box_mesh(Vec3::splat(-3e4), Vec3::new(-3e4 + 0.1, -3e4 + 0.1, -3e4 + 50.0)));
     check("far-outliers", &m.triangles(), 20_000, 5000.0);
 }
+
+/// Collinear triangles (the third corner at the midpoint of the others, as lattice scenes and
+/// scanned meshes have them): hit at their ends, where exact insertion once left them out (its
+/// plane axis, whose normal is rounding noise for such a triangle, took the first corner's
+/// projection for the whole triangle). Every kind, both insertions, resolutions that put the
+/// ends on and off cell walls, rays aimed at the ends and midpoints from lattice points.
+#[test]
+fn collinear_triangles_are_found_at_their_ends() {
+    let mut rng = Rng::new(2143);
+    let mut lattice = |n: u64| Vec3::new(rng.below(n) as f32, rng.below(n) as f32, rng.below(n) as f32);
+    // The case the fuzz found, inside a 16-cube fixed by two tiny triangles at its corners.
+    let mut tris = vec![[Vec3::new(6.0, 1.0, 9.0), Vec3::new(15.0, 6.0, 14.0), Vec3::new(10.5, 3.5, 11.5)]];
+    for c in [Vec3::ZERO, Vec3::splat(16.0)] {
+        tris.push([c, c + Vec3::new(0.01, 0.0, 0.0), c + Vec3::new(0.0, 0.01, 0.0)]);
+    }
+    for _ in 0..60 {
+        let (a, b) = (lattice(17), lattice(17));
+        if a != b {
+            tris.push([a, b, (a + b) * 0.5]);
+        }
+    }
+    let mut rays = vec![Ray::new(Vec3::new(13.0, 2.0, 8.0), Vec3::new(1.0, 2.0, 3.0), 0.0, 16.0)];
+    for t in tris.clone() {
+        for target in [t[0], t[1], t[2]] {
+            for _ in 0..8 {
+                let o = lattice(17);
+                if o != target {
+                    rays.push(Ray::new(o, target - o, 0.0, 2.0));
+                }
+            }
+        }
+    }
+    let (expected, _) = reference(&tris, &rays);
+    assert!(expected[0].is_hit(), "the fuzz's ray hits the end of its collinear triangle");
+    for kind in GridKind::ALL {
+        for insert in InsertMode::ALL {
+            for m in [17, 31, 32, 33, 47] {
+                let cfg = GridConfig {
+                    kind,
+                    build: BuildOptions { insert, parallel: true },
+                    resolution: Some(gridrt_grid::Resolution::Cubic(m)),
+                    ..GridConfig::default()
+                };
+                let (grid, _) = structure::build(&tris, &cfg).unwrap();
+                for traversal in Traversal::EXACT {
+                    let opts = TraceOptions { traversal, mailbox: true, ..Default::default() };
+                    let (hits, _) = grid.trace_batch(&tris, &rays, opts, true);
+                    assert_same_hits(
+                        &format!("collinear {kind} {insert:?} m={m} {traversal}"),
+                        &rays,
+                        &expected,
+                        &hits,
+                    );
+                }
+            }
+        }
+    }
+}
