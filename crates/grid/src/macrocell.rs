@@ -142,16 +142,13 @@ impl MacrocellGrid {
         }
         closest_hit(tris, ray, opts, |search| {
             let Some(fine_ray) = self.fine.geom.clip(&search.ray) else { return };
-            let cr = self.fine.cell_ray(&fine_ray);
             let macro_ray = self.macro_ray(&fine_ray);
             let mut t_enter = fine_ray.t0;
             let (_, cells) = walk_counted(traversal, &macro_ray, self.macro_res, |m, maddr, m_exit| {
                 // An occupied macrocell's fine walk is a call, keeping the macro walk's loop
                 // small (most macrocells are empty).
                 let entered = std::mem::replace(&mut t_enter, m_exit);
-                if self.occupied_at(maddr)
-                    && self.walk_block(m, &fine_ray, cr.as_ref(), (entered, m_exit), traversal, search)
-                {
+                if self.occupied_at(maddr) && self.walk_block(m, &fine_ray, (entered, m_exit), traversal, search) {
                     return true;
                 }
                 search.done_at(m_exit)
@@ -205,14 +202,13 @@ impl MacrocellGrid {
         UVec3::splat(self.a).min(self.fine.geom.res - lo)
     }
 
-    /// Walks the fine cells of macrocell `m` along `fine_ray` over `[t0, t1]` (with the slab
-    /// checks of `cell_ray`, the ray in the fine grid's space); true when the search is done.
+    /// Walks the fine cells of macrocell `m` along `fine_ray` over `[t0, t1]` (no slab checks:
+    /// they are Amanatides–Woo's, see `trace_flat`); true when the search is done.
     #[inline(never)]
     fn walk_block(
         &self,
         m: UVec3,
         fine_ray: &GridRay,
-        cell_ray: Option<&CellRay>,
         (t0, t1): (f32, f32),
         traversal: Traversal,
         search: &mut ClosestHit,
@@ -220,7 +216,7 @@ impl MacrocellGrid {
         let (lo, sub) = self.block_ray(m, fine_ray, t0, t1);
         let fine = &self.fine;
         let (done, cells) = walk_counted(traversal, &sub, self.block_res(lo), |c, _, t_exit| {
-            fine.visit_at(search, cell_ray, lo + c, fine.geom.cell_index(lo + c), t_exit)
+            fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
         });
         search.visit_cells(cells);
         done

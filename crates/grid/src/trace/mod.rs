@@ -50,7 +50,10 @@ impl TraceOptions {
 pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOptions) -> (Hit, RayStats) {
     closest_hit(tris, ray, opts, |search| {
         let Some(gr) = grid.geom.clip(&search.ray) else { return };
-        let cr = grid.cell_ray(&gr);
+        // The slab check's segment starts at the cell's entry as Amanatides–Woo computes it,
+        // which is the walk's own only for that walker (Liu's and Cleary–Wyvill's cells can be
+        // entered slightly earlier): the other walkers test every occupied cell.
+        let cr = if opts.traversal == Traversal::AmanatidesWoo { grid.cell_ray(&gr) } else { None };
         let (_, cells) = walk_counted(opts.traversal, &gr, grid.geom.res, |c, index, t_exit| {
             grid.visit_at(search, cr.as_ref(), c, index, t_exit)
         });
