@@ -192,44 +192,58 @@ pub fn wanted(grid: &FlatGrid, policy: CellPlanes, eligible: bool) -> bool {
     }
 }
 
+/// Occupied cells whose slabs [`CellPlanes::Auto`] computes first, evenly spaced over the
+/// grid, to estimate the share of references that would lie in cells with a slab: a grid that
+/// falls short (architecture, whose cells mix walls and floors) is refused without computing
+/// every slab (that had cost Sponza's macrocell build half again).
+const COVERAGE_SAMPLE: usize = 4096;
+
 /// The slab of each occupied cell of `grid` over `tris` (the triangles it was built from), in
 /// the order of [`FlatGrid::ref_start`]; [`CellPlane::NONE`] for cells of fewer than
 /// [`PLANE_MIN_REFS`] references or thicker than [`MAX_SLAB_CELLS`]. Under
 /// [`CellPlanes::Auto`], none at all (an empty vector) unless the cells with a slab hold
-/// [`PLANE_MIN_SHARE`] of the references.
+/// [`PLANE_MIN_SHARE`] of the references of [`COVERAGE_SAMPLE`] cells spread over the grid
+/// (every cell when there are no more).
 pub fn planes_of(grid: &FlatGrid, tris: &[[Vec3; 3]], policy: CellPlanes, parallel: bool) -> Vec<CellPlane> {
     let (min, inv) = (Vec3A::from(grid.geom.min), Vec3A::from(grid.geom.inv_cell));
     let to_grid = |p: Vec3| (Vec3A::from(p) - min) * inv;
     let cells = grid.ref_start.len().saturating_sub(1);
+    let refs_of = |j: usize| &grid.refs[grid.ref_start[j] as usize..grid.ref_start[j + 1] as usize];
     let plane = |j: usize| -> CellPlane {
-        let refs = &grid.refs[grid.ref_start[j] as usize..grid.ref_start[j + 1] as usize];
+        let refs = refs_of(j);
         if refs.len() < PLANE_MIN_REFS {
             return CellPlane::NONE;
         }
         CellPlane::of(refs, tris, to_grid)
     };
+    if policy == CellPlanes::Auto {
+        // Worth their check only where most references lie in cells with a slab.
+        let stride = cells.div_ceil(COVERAGE_SAMPLE).max(1);
+        let sampled = |j: usize| -> (u64, u64) {
+            let j = j * stride;
+            let n = refs_of(j).len() as u64;
+            (if plane(j) != CellPlane::NONE { n } else { 0 }, n)
+        };
+        let add = |a: (u64, u64), b: (u64, u64)| (a.0 + b.0, a.1 + b.1);
+        let samples = cells.div_ceil(stride);
+        #[cfg(feature = "parallel")]
+        let (covered, all) = if parallel {
+            use rayon::prelude::*;
+            (0..samples).into_par_iter().map(sampled).reduce(|| (0, 0), add)
+        } else {
+            (0..samples).map(sampled).fold((0, 0), add)
+        };
+        #[cfg(not(feature = "parallel"))]
+        let (covered, all) = (0..samples).map(sampled).fold((0, 0), add);
+        if (covered as f64) < PLANE_MIN_SHARE * all as f64 {
+            return Vec::new();
+        }
+    }
     #[cfg(feature = "parallel")]
-    let planes: Vec<CellPlane> = if parallel {
+    if parallel {
         use rayon::prelude::*;
-        (0..cells).into_par_iter().map(plane).collect()
-    } else {
-        (0..cells).map(plane).collect()
-    };
-    #[cfg(not(feature = "parallel"))]
-    let planes: Vec<CellPlane> = {
-        let _ = parallel;
-        (0..cells).map(plane).collect()
-    };
-    if policy == CellPlanes::On {
-        return planes;
+        return (0..cells).into_par_iter().map(plane).collect();
     }
-    // Worth their check only where most references lie in cells with a slab.
-    let covered: u64 = (0..cells)
-        .filter(|&j| planes[j] != CellPlane::NONE)
-        .map(|j| (grid.ref_start[j + 1] - grid.ref_start[j]) as u64)
-        .sum();
-    if (covered as f64) < PLANE_MIN_SHARE * grid.refs.len() as f64 {
-        return Vec::new();
-    }
-    planes
+    let _ = parallel;
+    (0..cells).map(plane).collect()
 }

@@ -259,20 +259,34 @@ fn occupancies(fine: &FlatGrid, sizes: &[u32]) -> Vec<(UVec3, Vec<u32>)> {
     let mut out: Vec<(UVec3, Vec<u32>)> = sizes
         .iter()
         .map(|&a| {
+            debug_assert!(a.is_power_of_two(), "macrocell size {a}");
             let m = macro_resolution(res, a);
             (m, vec![0u32; (m.x as usize * m.y as usize * m.z as usize).div_ceil(32)])
         })
         .collect();
-    let (rx, rxy) = (res.x as usize, res.x as usize * res.y as usize);
-    for (w, word) in fine.occupied.iter().enumerate() {
-        let mut bits = word.bits;
-        while bits != 0 {
-            let i = w * WORD_CELLS + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let c = UVec3::new((i % rx) as u32, ((i % rxy) / rx) as u32, (i / rxy) as u32);
-            for (&a, (macro_res, occ)) in sizes.iter().zip(&mut out) {
-                let k = linear_index(c / a, *macro_res);
-                occ[k / 32] |= 1 << (k % 32);
+    let shifts: Vec<u32> = sizes.iter().map(|a| a.trailing_zeros()).collect();
+    let rx = res.x as usize;
+    // Row by row of fine cells (x fastest), so a cell's macrocell is its row's first plus
+    // x >> log2 A: no division per occupied cell.
+    for z in 0..res.z {
+        for y in 0..res.y {
+            let first: Vec<usize> =
+                shifts.iter().zip(&out).map(|(&s, (m, _))| linear_index(UVec3::new(0, y >> s, z >> s), *m)).collect();
+            let base = (z as usize * res.y as usize + y as usize) * rx;
+            let (mut i, end) = (base, base + rx);
+            while i < end {
+                let (w, off) = (i / WORD_CELLS, i % WORD_CELLS);
+                let len = (WORD_CELLS - off).min(end - i);
+                let mut bits = (fine.occupied[w].bits >> off) as u64 & ((1u64 << len) - 1);
+                while bits != 0 {
+                    let x = i - base + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    for ((&s, &f), (_, occ)) in shifts.iter().zip(&first).zip(&mut out) {
+                        let k = f + (x >> s);
+                        occ[k / 32] |= 1 << (k % 32);
+                    }
+                }
+                i += len;
             }
         }
     }

@@ -530,3 +530,38 @@ fn hierarchies_keep_their_references_within_the_budget() {
         }
     }
 }
+
+/// Each macrocell is occupied exactly when a fine cell of its block is, for every candidate A
+/// (given, and the cost model's choice) on resolutions that are not multiples of A.
+#[test]
+fn macro_occupancy_is_that_of_its_fine_cells() {
+    use glam::UVec3;
+    use gridrt_grid::macrocell::{MACRO_SIZES, MacrocellGrid};
+    for (kind, size) in [(SceneKind::Particles, 800), (SceneKind::Slivers, 300), (SceneKind::Mountain, 4)] {
+        let tris = tris_of(kind, size);
+        let bounds = gridrt_scene::Aabb::of_triangles(&tris);
+        for res in [[37, 5, 19], [16, 16, 16], [1, 70, 3]] {
+            let given = MACRO_SIZES.iter().map(|&a| Some(a)).chain([Some(1), Some(32), None]);
+            for a in given {
+                let opts = BuildOptions { insert: InsertMode::BoundingBox, parallel: true };
+                let (g, _) = MacrocellGrid::build(&tris, &bounds, res, a, opts, &mut PhaseTimes::default()).unwrap();
+                let mut want = vec![false; g.occupancy.len() * 32];
+                let r = g.fine.geom.res;
+                for z in 0..r.z {
+                    for y in 0..r.y {
+                        for x in 0..r.x {
+                            let c = UVec3::new(x, y, z);
+                            if g.fine.is_occupied(g.fine.geom.cell_index(c)) {
+                                let m = c / g.a;
+                                want[(m.x + g.macro_res.x * (m.y + g.macro_res.y * m.z)) as usize] = true;
+                            }
+                        }
+                    }
+                }
+                for (k, &w) in want.iter().enumerate() {
+                    assert_eq!(g.occupancy[k / 32] >> (k % 32) & 1 != 0, w, "{kind:?} {res:?} A {} macrocell {k}", g.a);
+                }
+            }
+        }
+    }
+}
