@@ -48,7 +48,7 @@
 //!   1.4× larger; and counting exact N_m costs more than the build itself (the overlap test per
 //!   candidate cell). The README's levers table has the measurements.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use gridrt_scene::Aabb;
 use serde::{Deserialize, Serialize};
 
@@ -588,6 +588,7 @@ fn count_curve<const SKIP: bool>(
         return (Vec::new(), tris.len());
     }
     let min = grids[0].min;
+    let min_a = Vec3A::from(min);
     let stride = tris.len().div_ceil(EXACT_COUNT_LIMIT).max(1);
     // The stratum of the box `[lo, hi]`: small, medium, or `None` for large (always exact).
     let stratum = |lo: Vec3, hi: Vec3| {
@@ -604,8 +605,12 @@ fn count_curve<const SKIP: bool>(
     let tally = |exact: [bool; STRATA], large: bool, base: usize, part: &[[Vec3; 3]]| {
         let mut t = Tally::new(k);
         for (j, tri) in part.iter().enumerate() {
-            let lo = tri[0].min(tri[1]).min(tri[2]) - min;
-            let hi = tri[0].max(tri[1]).max(tri[2]) - min;
+            // On SIMD lanes (the same operations per lane as `Vec3`'s): a run with wide
+            // triangles is read whole, and its scalar minima and maxima were most of the time
+            // guess-and-check took on CAD models.
+            let v = tri.map(Vec3A::from);
+            let lo = Vec3::from(v[0].min(v[1]).min(v[2]) - min_a);
+            let hi = Vec3::from(v[0].max(v[1]).max(v[2]) - min_a);
             let (sum, n) = match stratum(lo, hi) {
                 None if !large => continue,
                 None => (&mut t.large, None),
