@@ -105,9 +105,11 @@ impl CellPlane {
             for v in corners(t) {
                 lo = lo.min(v);
                 hi = hi.max(v);
+                // Selects, not `f32::min`'s NaN handling (a NaN is skipped either way: `a` and
+                // `b` never are one), which had been a third of the loop.
                 let d = n.dot(v);
-                a = a.min(d);
-                b = b.max(d);
+                a = if d < a { d } else { a };
+                b = if d > b { d } else { b };
             }
         }
         let e = hi - lo;
