@@ -120,13 +120,9 @@ pub fn flat_grid_reusing(
     // sequence), in increasing order: each chunk of triangles sorts its own by slab (a counting
     // sort), and a slab reads its run of every chunk, chunks in order. Any layout gives the same
     // grid; it only decides how the work is cut.
-    let bin_chunk = |k: usize, part: &[CellBox], slabs: usize, edge: &[u32], slab_of_layer: &[u32]| {
-        let mut start = vec![0u32; slabs + 1];
-        for b in part {
-            for s in b.slabs(slab_of_layer) {
-                start[s + 1] += 1;
-            }
-        }
+    // `start[s + 1]`: the copies of `part`'s ranges slab `s` gets (counted by the caller).
+    let place = |k: usize, part: &[CellBox], mut start: Vec<u32>, edge: &[u32], slab_of_layer: &[u32]| {
+        let slabs = start.len() - 1;
         for s in 0..slabs {
             start[s + 1] += start[s];
         }
@@ -145,6 +141,16 @@ pub fn flat_grid_reusing(
         }
         SlabBins { items, start, box_cells }
     };
+    let count_copies = |b: CellBox, start: &mut [u32], slab_of_layer: &[u32]| {
+        for s in b.slabs(slab_of_layer) {
+            start[s + 1] += 1;
+        }
+    };
+    let bin_chunk = |k: usize, part: &[CellBox], slabs: usize, edge: &[u32], slab_of_layer: &[u32]| {
+        let mut start = vec![0u32; slabs + 1];
+        part.iter().for_each(|&b| count_copies(b, &mut start, slab_of_layer));
+        place(k, part, start, edge, slab_of_layer)
+    };
     let range_of = |t: &[Vec3; 3]| CellBox::pack(box_cell_range(&geom, t, INSERT_MARGIN_CELLS as f32));
     // First in one pass over the triangles: each chunk prepares its triangles' cell ranges in a
     // buffer of its thread's (in cache) and bins them into thin slabs, unless they would be
@@ -160,9 +166,15 @@ pub fn flat_grid_reusing(
                 CHUNK_BOXES.with(|boxes| {
                     let mut boxes = boxes.borrow_mut();
                     boxes.clear();
-                    boxes.extend(part.iter().map(range_of));
-                    let pairs: u64 = boxes.iter().map(|b| b.slabs_met(&slab_of_layer)).sum();
-                    (pairs <= 4 * part.len() as u64).then(|| bin_chunk(k, &boxes, many, &edge, &slab_of_layer))
+                    // The ranges and their copies per slab in one pass.
+                    let mut start = vec![0u32; many + 1];
+                    boxes.extend(part.iter().map(|t| {
+                        let b = range_of(t);
+                        count_copies(b, &mut start, &slab_of_layer);
+                        b
+                    }));
+                    let pairs: u64 = start.iter().map(|&n| n as u64).sum();
+                    (pairs <= 4 * part.len() as u64).then(|| place(k, &boxes, start, &edge, &slab_of_layer))
                 })
             })
             .collect();
