@@ -210,9 +210,8 @@ pub fn planes_of(grid: &FlatGrid, tris: &[[Vec3; 3]], policy: CellPlanes, parall
     let (min, inv) = (Vec3A::from(grid.geom.min), Vec3A::from(grid.geom.inv_cell));
     let to_grid = |p: Vec3| (Vec3A::from(p) - min) * inv;
     let cells = grid.ref_start.len().saturating_sub(1);
-    let refs_of = |j: usize| &grid.refs[grid.ref_start[j] as usize..grid.ref_start[j + 1] as usize];
     let plane = |j: usize| -> CellPlane {
-        let refs = refs_of(j);
+        let refs = grid.refs_at(j);
         if refs.len() < PLANE_MIN_REFS {
             return CellPlane::NONE;
         }
@@ -223,7 +222,7 @@ pub fn planes_of(grid: &FlatGrid, tris: &[[Vec3; 3]], policy: CellPlanes, parall
         let stride = cells.div_ceil(COVERAGE_SAMPLE).max(1);
         let sampled = |j: usize| -> (u64, u64) {
             let j = j * stride;
-            let n = refs_of(j).len() as u64;
+            let n = grid.refs_at(j).len() as u64;
             (if plane(j) != CellPlane::NONE { n } else { 0 }, n)
         };
         let add = |a: (u64, u64), b: (u64, u64)| (a.0 + b.0, a.1 + b.1);

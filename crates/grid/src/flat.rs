@@ -168,7 +168,12 @@ impl FlatGrid {
     /// `ref_start`.
     #[inline]
     pub(crate) fn refs_of(&self, index: usize) -> &[u32] {
-        let j = self.rank(index);
+        self.refs_at(self.rank(index))
+    }
+
+    /// The references of the `j`-th occupied cell (in [`FlatGrid::ref_start`]'s order).
+    #[inline]
+    pub(crate) fn refs_at(&self, j: usize) -> &[u32] {
         &self.refs[self.ref_start[j] as usize..self.ref_start[j + 1] as usize]
     }
 
@@ -230,7 +235,7 @@ impl FlatGrid {
         t_exit: f32,
     ) -> bool {
         let j = self.rank(index);
-        let refs = &self.refs[self.ref_start[j] as usize..self.ref_start[j + 1] as usize];
+        let refs = self.refs_at(j);
         if self.slab_misses(ray, j, c, t_exit) {
             return search.done_at(t_exit);
         }
