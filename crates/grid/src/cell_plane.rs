@@ -217,34 +217,37 @@ pub fn planes_of(grid: &FlatGrid, tris: &[[Vec3; 3]], policy: CellPlanes, parall
         }
         CellPlane::of(refs, tris, to_grid)
     };
-    if policy == CellPlanes::Auto {
-        // Worth their check only where most references lie in cells with a slab.
-        let stride = cells.div_ceil(COVERAGE_SAMPLE).max(1);
-        let sampled = |j: usize| -> (u64, u64) {
-            let j = j * stride;
+    // Worth their check only where most references lie in cells with a slab: whether the
+    // cells with one hold PLANE_MIN_SHARE of the references among `(cell, slab)`.
+    let covers = |pairs: &mut dyn Iterator<Item = (usize, CellPlane)>| {
+        let (covered, all) = pairs.fold((0u64, 0u64), |(c, a), (j, p)| {
             let n = grid.refs_at(j).len() as u64;
-            (if plane(j) != CellPlane::NONE { n } else { 0 }, n)
-        };
-        let add = |a: (u64, u64), b: (u64, u64)| (a.0 + b.0, a.1 + b.1);
-        let samples = cells.div_ceil(stride);
-        #[cfg(feature = "parallel")]
-        let (covered, all) = if parallel {
-            use rayon::prelude::*;
-            (0..samples).into_par_iter().map(sampled).reduce(|| (0, 0), add)
-        } else {
-            (0..samples).map(sampled).fold((0, 0), add)
-        };
-        #[cfg(not(feature = "parallel"))]
-        let (covered, all) = (0..samples).map(sampled).fold((0, 0), add);
-        if (covered as f64) < PLANE_MIN_SHARE * all as f64 {
+            (c + if p != CellPlane::NONE { n } else { 0 }, a + n)
+        });
+        covered as f64 >= PLANE_MIN_SHARE * all as f64
+    };
+    let stride = cells.div_ceil(COVERAGE_SAMPLE).max(1);
+    if policy == CellPlanes::Auto && stride > 1 {
+        let sample = each_cell(cells.div_ceil(stride), parallel, |k| plane(k * stride));
+        if !covers(&mut sample.into_iter().enumerate().map(|(k, p)| (k * stride, p))) {
             return Vec::new();
         }
     }
+    let planes = each_cell(cells, parallel, plane);
+    // A grid of at most COVERAGE_SAMPLE occupied cells is its own sample.
+    if policy == CellPlanes::Auto && stride == 1 && !covers(&mut planes.iter().copied().enumerate()) {
+        return Vec::new();
+    }
+    planes
+}
+
+/// `f` of each of `0..n`, on all threads when `parallel` (and the `parallel` feature).
+fn each_cell(n: usize, parallel: bool, f: impl Fn(usize) -> CellPlane + Sync + Send) -> Vec<CellPlane> {
     #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
-        return (0..cells).into_par_iter().map(plane).collect();
+        return (0..n).into_par_iter().map(f).collect();
     }
     let _ = parallel;
-    (0..cells).map(plane).collect()
+    (0..n).map(f).collect()
 }
