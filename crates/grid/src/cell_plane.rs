@@ -59,6 +59,15 @@ pub enum CellPlanes {
     Off,
 }
 
+impl CellPlanes {
+    /// This policy for a grid traced by the CPU's single rays (`single_rays`) or not: slabs are
+    /// read by single rays only, so under `Auto` packets and the GPU get none (`On` and `Off`
+    /// stay as asked).
+    pub fn for_tracing(self, single_rays: bool) -> CellPlanes {
+        if self == CellPlanes::Auto && !single_rays { CellPlanes::Off } else { self }
+    }
+}
+
 impl std::str::FromStr for CellPlanes {
     type Err = String;
     fn from_str(s: &str) -> Result<CellPlanes, String> {

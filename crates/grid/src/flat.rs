@@ -187,67 +187,45 @@ impl FlatGrid {
     }
 
     /// Whether the walk of `search` ends in cell `index`, which it leaves at `t_exit`: the
-    /// cell's triangles are tested (an empty cell only checks the best hit so far). The caller
-    /// counts the visited cells ([`crate::traversal::walk_counted`]).
+    /// cell's triangles are tested (an empty cell only checks the best hit so far). With `slab`
+    /// (the search's ray in this grid's space, when the grid has slabs, and the cell's
+    /// coordinates) an occupied cell whose slab the ray's segment misses is passed as an empty
+    /// one ([`crate::cell_plane`]). The caller counts the visited cells
+    /// ([`crate::traversal::walk_counted`]).
     #[inline(always)]
-    pub fn visit(&self, search: &mut ClosestHit, index: usize, t_exit: f32) -> bool {
+    pub fn visit(&self, search: &mut ClosestHit, slab: Option<(&CellRay, UVec3)>, index: usize, t_exit: f32) -> bool {
         // Most cells are empty: their check stays in the walk's loop, and the tests of an
         // occupied cell are a call, which keeps that loop small enough to be compiled into the
         // walk (measured: a third fewer cycles per ray than one out-of-line visit per cell).
         if !self.is_occupied(index) {
             return search.done_at(t_exit);
         }
-        self.test_occupied(search, index, t_exit)
+        self.test_occupied(search, slab, index, t_exit)
     }
 
-    /// The tests of cell `index`, which holds references.
+    /// The tests of cell `index`, which holds references, unless `slab`'s segment misses the
+    /// cell's slab (see [`FlatGrid::visit`]).
     #[inline(never)]
-    pub(crate) fn test_occupied(&self, search: &mut ClosestHit, index: usize, t_exit: f32) -> bool {
-        search.test_cell(self.refs_of(index), t_exit)
-    }
-
-    /// [`FlatGrid::visit`] of cell `c` (index `index`) along `ray` (the search's ray in this
-    /// grid's space, when the grid has slabs): an occupied cell whose slab the ray's segment
-    /// misses is passed as an empty one ([`crate::cell_plane`]).
-    #[inline(always)]
-    pub fn visit_at(
+    pub(crate) fn test_occupied(
         &self,
         search: &mut ClosestHit,
-        ray: Option<&CellRay>,
-        c: UVec3,
-        index: usize,
-        t_exit: f32,
-    ) -> bool {
-        if !self.is_occupied(index) {
-            return search.done_at(t_exit);
-        }
-        self.test_occupied_at(search, ray, c, index, t_exit)
-    }
-
-    /// [`FlatGrid::test_occupied`] with the slab check of [`FlatGrid::visit_at`].
-    #[inline(never)]
-    pub(crate) fn test_occupied_at(
-        &self,
-        search: &mut ClosestHit,
-        ray: Option<&CellRay>,
-        c: UVec3,
+        slab: Option<(&CellRay, UVec3)>,
         index: usize,
         t_exit: f32,
     ) -> bool {
         let j = self.rank(index);
-        let refs = self.refs_at(j);
-        if self.slab_misses(ray, j, c, t_exit) {
+        if self.slab_misses(slab, j, t_exit) {
             return search.done_at(t_exit);
         }
-        search.test_cell(refs, t_exit)
+        search.test_cell(self.refs_at(j), t_exit)
     }
 
-    /// Whether the occupied cell of rank `j` (cell `c`) has a slab that `ray`'s segment in it,
-    /// up to `t_exit`, misses.
+    /// Whether the occupied cell of rank `j` has a slab that the segment of `slab`'s ray in its
+    /// cell, up to `t_exit`, misses.
     #[inline(always)]
-    pub(crate) fn slab_misses(&self, ray: Option<&CellRay>, j: usize, c: UVec3, t_exit: f32) -> bool {
-        match (ray, self.planes.get(j)) {
-            (Some(r), Some(p)) if p.lo > f32::NEG_INFINITY => p.misses(r, c, t_exit),
+    pub(crate) fn slab_misses(&self, slab: Option<(&CellRay, UVec3)>, j: usize, t_exit: f32) -> bool {
+        match (slab, self.planes.get(j)) {
+            (Some((r, c)), Some(p)) if p.lo > f32::NEG_INFINITY => p.misses(r, c, t_exit),
             _ => false,
         }
     }

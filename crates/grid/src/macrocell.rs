@@ -163,7 +163,7 @@ impl MacrocellGrid {
     #[inline]
     pub fn visit(&self, search: &mut ClosestHit, ray: Option<&CellRay>, c: UVec3, index: usize, t_exit: f32) -> Visit {
         if self.fine.is_occupied(index) {
-            if self.fine.test_occupied_at(search, ray, c, index, t_exit) {
+            if self.fine.test_occupied(search, ray.map(|r| (r, c)), index, t_exit) {
                 return Visit::Stop;
             }
         } else if !self.occupied(c >> self.log2_edge()) {
@@ -216,7 +216,7 @@ impl MacrocellGrid {
         let (lo, sub) = self.block_ray(m, fine_ray, t0, t1);
         let fine = &self.fine;
         let (done, cells) = walk_counted(traversal, &sub, self.block_res(lo), |c, _, t_exit| {
-            fine.visit(search, fine.geom.cell_index(lo + c), t_exit)
+            fine.visit(search, None, fine.geom.cell_index(lo + c), t_exit)
         });
         search.visit_cells(cells);
         done

@@ -64,7 +64,7 @@ impl ProximityGrid {
                         Jump::End => true,
                         Jump::Step { empty: true } => search.done_at(t_exit),
                         // The tests are a call, as in the flat grid.
-                        Jump::Step { empty: false } => self.grid.test_occupied(search, idx, t_exit),
+                        Jump::Step { empty: false } => self.grid.test_occupied(search, None, idx, t_exit),
                     });
                 search.visit_cells(cells);
                 match restart {

@@ -606,8 +606,8 @@ fn count_curve<const SKIP: bool>(
         let mut t = Tally::new(k);
         for (j, tri) in part.iter().enumerate() {
             // On SIMD lanes (the same operations per lane as `Vec3`'s): a run with wide
-            // triangles is read whole, and its scalar minima and maxima were most of the time
-            // guess-and-check took on CAD models.
+            // triangles is read whole, and its scalar minima and maxima were a seventh of the
+            // engine's guess-and-check.
             let v = tri.map(Vec3A::from);
             let lo = Vec3::from(v[0].min(v[1]).min(v[2]) - min_a);
             let hi = Vec3::from(v[0].max(v[1]).max(v[2]) - min_a);

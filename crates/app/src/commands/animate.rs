@@ -8,7 +8,6 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use gridrt_gpu::{GpuSession, RenderOptions};
-use gridrt_grid::cell_plane::CellPlanes;
 use serde::Serialize;
 
 use super::build_grid;
@@ -75,10 +74,7 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let clip = player.rig.clips()[first.clip].clone();
     let frames = args.frames.unwrap_or_else(|| ((clip.duration() * args.fps).round() as u32).max(1));
     let mut cfg = args.grid.config()?;
-    // Cell slabs are read by the CPU's single rays only: under auto, none for packets or the GPU.
-    if cfg.cell_planes == CellPlanes::Auto && (args.packets.on() || args.backend == Device::Gpu) {
-        cfg.cell_planes = CellPlanes::Off;
-    }
+    cfg.cell_planes = cfg.cell_planes.for_tracing(!args.packets.on() && args.backend != Device::Gpu);
     let (width, height) = args.size;
     let bounds = player.clip_bounds(16)?;
     let view = FixedView::new(&bounds, width, height);

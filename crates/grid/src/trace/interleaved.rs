@@ -331,7 +331,7 @@ impl<W: CellWalk> Slot<'_, W> {
                 let grid = self.walk.cells();
                 // A cell whose slab the segment misses is passed as an empty one, as the
                 // single-ray walk passes it.
-                if grid.slab_misses(self.walk.cell_ray(), entry, cell, t_exit) {
+                if grid.slab_misses(self.walk.cell_ray().map(|r| (r, cell)), entry, t_exit) {
                     if self.search.done_at(t_exit) {
                         return Some(self.finish());
                     }

@@ -55,7 +55,7 @@ pub fn trace_flat(grid: &FlatGrid, tris: &[[Vec3; 3]], ray: &Ray, opts: TraceOpt
         // entered slightly earlier): the other walkers test every occupied cell.
         let cr = if opts.traversal == Traversal::AmanatidesWoo { grid.cell_ray(&gr) } else { None };
         let (_, cells) = walk_counted(opts.traversal, &gr, grid.geom.res, |c, index, t_exit| {
-            grid.visit_at(search, cr.as_ref(), c, index, t_exit)
+            grid.visit(search, cr.as_ref().map(|r| (r, c)), index, t_exit)
         });
         search.visit_cells(cells);
     })

@@ -306,12 +306,7 @@ fn bench_scene(
                         &GridConfig {
                             kind,
                             cost: *cost,
-                            // Packets do not read cell slabs: none are built for them.
-                            cell_planes: if matches!(strategy, Strategy::GridPackets(_)) {
-                                CellPlanes::Off
-                            } else {
-                                CellPlanes::Auto
-                            },
+                            cell_planes: CellPlanes::Auto.for_tracing(!matches!(strategy, Strategy::GridPackets(_))),
                             ..GridConfig::default()
                         },
                         &mut scratches[s],
