@@ -253,15 +253,32 @@ pub struct SliceWalk {
     next_start: u32,
 }
 
+/// The walk axis of a packet of `rays`: the dominant axis of the middle of the box of their
+/// grid-space directions (as `coherent.wgsl` chooses it; rays with an empty interval or a
+/// non-finite direction are left out), `None` when no ray is left. Only which slices the packet
+/// walks depends on it, never a hit.
+fn packet_axis(geom: &GridGeometry, rays: &[Ray]) -> Option<usize> {
+    use glam::Vec3A;
+    let inv = Vec3A::from(geom.inv_cell);
+    let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    for r in rays {
+        let d = Vec3A::from(r.d()) * inv;
+        if d.is_finite() && r.tmin <= r.tmax {
+            (lo, hi) = (lo.min(d), hi.max(d));
+        }
+    }
+    let mid = (lo + hi).abs();
+    mid.is_finite().then(|| crate::ray::argmax3(mid.to_array()))
+}
+
 impl SliceWalk {
-    /// Prepares `rays` as `lanes` and chooses the walk axis: the dominant axis of the packet's
-    /// mean direction, which every valid ray must cross with the same sign. `None` for an
-    /// incoherent packet (trace its rays one by one).
-    /// `active` receives the valid lanes.
+    /// Prepares `rays` as `lanes` and chooses the walk axis ([`packet_axis`]), which every
+    /// valid ray must cross with the same sign. `None` for an incoherent packet (trace its rays
+    /// one by one). `active` receives the valid lanes.
     pub fn new(geom: &GridGeometry, rays: &[Ray], lanes: &mut Vec<Lane>, active: &mut Vec<u32>) -> Option<SliceWalk> {
         lanes.clear();
         active.clear();
-        let mut mean = [0f64; 3];
+        let axis = packet_axis(geom, rays)?;
         let mut ends = (None, None);
         for r in rays {
             let clipped = PreparedRay::new(r).and_then(|pr| geom.clip(&pr).map(|g| (pr, g)));
@@ -269,12 +286,10 @@ impl SliceWalk {
                 Some((ray, g)) => {
                     let o = g.o.to_array().map(f64::from);
                     let d = g.d.to_array().map(f64::from);
-                    // Camera and shadow rays of a tile have similar lengths: a plain sum.
-                    (0..3).for_each(|k| mean[k] += d[k]);
                     if ends.0.is_none() {
                         let tmax = ray.walk_t(r.tmax);
-                        let end = (tmax.is_finite()).then(|| std::array::from_fn(|k| o[k] + d[k] * tmax as f64));
-                        ends = (Some(o), end);
+                        let end = (tmax.is_finite()).then(|| o[axis] + d[axis] * tmax as f64);
+                        ends = (Some(o[axis]), end);
                     }
                     Lane { ray: Some(ray), o, d, t0: g.t0, t1: g.t1, ..Lane::INVALID }
                 }
@@ -282,12 +297,19 @@ impl SliceWalk {
             };
             lanes.push(lane);
         }
-        let axis = crate::ray::argmax3(mean.map(f64::abs));
-        let positive = mean[axis] > 0.0;
+        // The rays' sign on the axis: the first valid ray's.
+        let positive = lanes.iter().find(|l| l.ray.is_some()).is_none_or(|l| l.d[axis] > 0.0);
         let res = geom.res[axis];
+        let others = [(axis + 1) % 3, (axis + 2) % 3];
         let (mut first, mut last) = (u32::MAX, 0u32);
         let mut single_ray_cells = 0.0;
-        for l in lanes.iter_mut().filter(|l| l.ray.is_some()) {
+        // The lines' bounds at the first ray's origin, the first candidate reference plane.
+        let mut at_origin = Bounds::EMPTY;
+        let s0 = ends.0.unwrap_or(0.0);
+        for (i, l) in lanes.iter_mut().enumerate() {
+            if l.ray.is_none() {
+                continue;
+            }
             if !(l.d[axis] != 0.0 && (l.d[axis] > 0.0) == positive) {
                 return None;
             }
@@ -302,37 +324,26 @@ impl SliceWalk {
             let len = (l.t1 - l.t0) as f64;
             single_ray_cells += 1.0 + l.d.iter().map(|d| (d * len).abs()).sum::<f64>();
             l.t_per_cell = 1.0 / l.d[axis];
-            l.slope = [(axis + 1) % 3, (axis + 2) % 3].map(|u| l.d[u] * l.t_per_cell);
+            l.slope = others.map(|u| l.d[u] * l.t_per_cell);
             l.t_at_0 = -l.o[axis] * l.t_per_cell;
             first = first.min(l.first);
             last = last.max(l.last);
+            at_origin.add(others, axis, s0, l);
+            active.push(i as u32);
         }
-        let mut walk = SliceWalk {
-            axis,
-            positive,
-            slices: res,
-            first,
-            last,
-            s_ref: 0.0,
-            single_ray_cells,
-            bounds: Bounds::EMPTY,
-            next_start: first,
-        };
         // The reference plane: the first ray's origin or its end, whichever the rays are
-        // closer together at.
-        active.extend((0..lanes.len() as u32).filter(|&i| lanes[i as usize].ray.is_some()));
-        // (A common origin, as a camera tile's, has no spread: the end is then not looked at.)
+        // closer together at. (A common origin, as a camera tile's, has no spread: the end is
+        // then not looked at.)
         let spread = |b: &Bounds| (b.c_hi[0] - b.c_lo[0]) + (b.c_hi[1] - b.c_lo[1]);
-        let at = |p: Option<[f64; 3]>| p.map(|p| (p[axis], Bounds::of(axis, p[axis], lanes, active, u32::MAX)));
-        (walk.s_ref, walk.bounds) = match at(ends.0) {
-            Some(a) if spread(&a.1) == 0.0 => a,
-            Some(a) => match at(ends.1) {
-                Some(b) if spread(&b.1) < spread(&a.1) => b,
-                _ => a,
-            },
-            None => at(ends.1).unwrap_or_else(|| (0.0, Bounds::of(axis, 0.0, lanes, active, u32::MAX))),
+        let (s_ref, bounds) = match ends {
+            (None, _) => (0.0, Bounds::EMPTY),
+            (Some(s0), Some(s1)) if spread(&at_origin) != 0.0 => {
+                let at_end = Bounds::of(axis, s1, lanes, active, u32::MAX);
+                if spread(&at_end) < spread(&at_origin) { (s1, at_end) } else { (s0, at_origin) }
+            }
+            (Some(s0), _) => (s0, at_origin),
         };
-        Some(walk)
+        Some(SliceWalk { axis, positive, slices: res, first, last, s_ref, single_ray_cells, bounds, next_start: first })
     }
 
     /// The bounds of the lines of `lanes[i]` for each `i` of `which`.

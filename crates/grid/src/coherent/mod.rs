@@ -442,7 +442,7 @@ impl Packet {
                         rays_soa.bound_chunks(lanes, &walk);
                     }
                     let test = packet_test::TriangleTest { tri: t, id: tri, cull: cull.then_some((&walk, &tb)) };
-                    changed |= rays_soa.test(&test, best, cull_stats);
+                    changed |= rays_soa.test(lanes, &test, best, cull_stats);
                 }
             });
             // No ray can leave before `next_check` unless some ray's best hit changed.

@@ -36,9 +36,9 @@ pub struct PacketRays {
     pos: Vec<u32>,
     /// Rays removed since the last gather.
     dead: usize,
-    /// Lane index of each ray (`u32::MAX` in padding and for removed rays).
+    /// Lane index of each ray (`u32::MAX` in padding and for removed rays): its prepared ray,
+    /// for the exact test, is the lane's (not copied).
     lane: Vec<u32>,
-    ray: Vec<PreparedRay>,
     /// The origin at the permutation (x, y, z) and the shear.
     ox: Vec<f32>,
     oy: Vec<f32>,
@@ -57,14 +57,14 @@ impl PacketRays {
     pub fn gather(&mut self, lanes: &[Lane], active: &[u32]) {
         // The permutation is fixed by the dominant axis kz and whether kx, ky are swapped.
         let code = |r: &PreparedRay| r.kz * 2 + (r.kx != (r.kz + 1) % 3) as usize;
-        let ray = |i: u32| lanes[i as usize].ray.expect("active lanes are valid");
+        let ray = |i: u32| lanes[i as usize].ray.as_ref().expect("active lanes are valid");
         // A counting sort by permutation: each group's place, padded to whole chunks.
         let mut count = [0usize; 6];
         let mut perm = [[0usize; 3]; 6];
         self.codes.clear();
         for &i in active {
             let r = ray(i);
-            let c = code(&r);
+            let c = code(r);
             count[c] += 1;
             perm[c] = [r.kx, r.ky, r.kz];
             self.codes.push(c as u8);
@@ -79,10 +79,6 @@ impl PacketRays {
         }
         self.lane.clear();
         self.lane.resize(total, u32::MAX);
-        self.ray.clear();
-        if let Some(&first) = active.first() {
-            self.ray.resize(total, ray(first));
-        }
         for v in [&mut self.ox, &mut self.oy, &mut self.oz, &mut self.sx, &mut self.sy] {
             v.clear();
             v.resize(total, 0.0);
@@ -96,7 +92,6 @@ impl PacketRays {
             let r = ray(i);
             self.pos[i as usize] = k as u32;
             self.lane[k] = i;
-            self.ray[k] = r;
             (self.ox[k], self.oy[k], self.oz[k]) = (r.org_k[0], r.org_k[1], r.org_k[2]);
             (self.sx[k], self.sy[k]) = (r.sx, r.sy);
         }
@@ -104,8 +99,7 @@ impl PacketRays {
         // a hit recorded.
         for g in &self.groups {
             for k in g.start + g.len..g.start + g.len.next_multiple_of(LANES) {
-                (self.ray[k], self.ox[k], self.oy[k], self.oz[k]) =
-                    (self.ray[g.start], self.ox[g.start], self.oy[g.start], self.oz[g.start]);
+                (self.ox[k], self.oy[k], self.oz[k]) = (self.ox[g.start], self.oy[g.start], self.oz[g.start]);
                 (self.sx[k], self.sy[k]) = (self.sx[g.start], self.sy[g.start]);
             }
         }
@@ -149,8 +143,8 @@ impl PacketRays {
     /// `best`; true when some lane's hit changed. With `t.cull`, each chunk whose lines all pass away from the triangle's box is spared
     /// (counted in `cull_stats`).
     #[inline]
-    pub fn test(&self, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut CullStats) -> bool {
-        test_rays(self, t, best, cull_stats)
+    pub fn test(&self, lanes: &[Lane], t: &TriangleTest, best: &mut [Hit], cull_stats: &mut CullStats) -> bool {
+        test_rays(self, lanes, t, best, cull_stats)
     }
 }
 
@@ -177,7 +171,13 @@ pub struct TriangleTest<'a> {
 /// same rays.
 #[allow(unsafe_code)] // the dispatch `multiversion` generates: a version runs only where its features are detected
 #[multiversion::multiversion(targets("x86_64+avx2+fma", "x86_64+avx"))]
-fn test_rays(rays: &PacketRays, t: &TriangleTest, best: &mut [Hit], cull_stats: &mut CullStats) -> bool {
+fn test_rays(
+    rays: &PacketRays,
+    lanes: &[Lane],
+    t: &TriangleTest,
+    best: &mut [Hit],
+    cull_stats: &mut CullStats,
+) -> bool {
     let TriangleTest { tri, id, cull } = *t;
     let mut changed = false;
     let mut live = u32::MAX;
@@ -197,19 +197,17 @@ fn test_rays(rays: &PacketRays, t: &TriangleTest, best: &mut [Hit], cull_stats: 
                     continue;
                 }
             }
-            let lanes = |v: &[f32]| -> Lanes { v[chunk..chunk + LANES].try_into().expect("eight lanes") };
-            let o = [lanes(&rays.ox), lanes(&rays.oy), lanes(&rays.oz)];
-            let shear = [lanes(&rays.sx), lanes(&rays.sy)];
+            let chunk_of = |v: &[f32]| -> Lanes { v[chunk..chunk + LANES].try_into().expect("eight lanes") };
+            let o = [chunk_of(&rays.ox), chunk_of(&rays.oy), chunk_of(&rays.oz)];
+            let shear = [chunk_of(&rays.sx), chunk_of(&rays.sy)];
             let mut keep = !certainly_outside8(&corners, &o, &shear) & 0xff;
             while keep != 0 {
                 let k = chunk + keep.trailing_zeros() as usize;
                 keep &= keep - 1;
                 let i = rays.lane[k];
-                if i == u32::MAX {
-                    continue;
-                }
-                let i = i as usize;
-                changed |= keep_closer(&mut best[i], intersect_prefiltered(&rays.ray[k], tri), id);
+                // Padding, a removed ray: no lane (a valid lane always has its ray).
+                let Some(ray) = lanes.get(i as usize).and_then(|l| l.ray.as_ref()) else { continue };
+                changed |= keep_closer(&mut best[i as usize], intersect_prefiltered(ray, tri), id);
             }
         }
     }
