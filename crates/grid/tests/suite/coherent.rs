@@ -186,6 +186,39 @@ fn incoherent_packets_fall_back_to_single_rays() {
     assert!(ps.single_ray_packets >= 12, "random directions: most packets are incoherent ({ps:?})");
 }
 
+/// Images whose rays include ones no triangle can be hit by (NaN, infinite or zero directions
+/// and origins, empty or NaN intervals) and huge directions, alone in a packet, among good rays
+/// or making up a whole packet: every packet's hits equal brute force's, and the good rays'
+/// tiles still walk as packets.
+#[test]
+fn packets_with_hostile_rays_equal_brute_force() {
+    let (name, g) = procedural_scenes().remove(0);
+    let tris = g.mesh.triangles();
+    let b = g.mesh.bounds();
+    let (width, height) = (32u32, 24u32);
+    let mut rays = image_rays(&Camera::fit(&b, 4.0 / 3.0), width, height);
+    let hostile = [
+        Ray::new(Vec3::NAN, Vec3::X, 0.0, f32::INFINITY),
+        Ray::new(b.center(), Vec3::new(f32::NAN, 1.0, 0.0), 0.0, f32::INFINITY),
+        Ray::new(b.center(), Vec3::ZERO, 0.0, f32::INFINITY),
+        Ray::new(b.center(), Vec3::new(f32::INFINITY, 0.0, 0.0), 0.0, f32::INFINITY),
+        Ray::new(Vec3::splat(f32::INFINITY), -Vec3::Z, 0.0, f32::INFINITY),
+        Ray::new(b.center(), -Vec3::Z, 2.0, 1.0),
+        Ray::new(b.center(), -Vec3::Z, f32::NAN, 1.0),
+        Ray::new(b.min - b.extent(), b.extent() * 1e30, 0.0, f32::INFINITY),
+    ];
+    // Scattered over the image (every 7th ray) and filling its first tile.
+    for (k, r) in rays.iter_mut().enumerate() {
+        if k % 7 == 3 || (k % width as usize) < 8 && k / (width as usize) < 8 {
+            *r = hostile[k % hostile.len()];
+        }
+    }
+    let (expected, _) = reference(&tris, &rays);
+    let coherent =
+        check_packets(&format!("{name} hostile rays"), &tris, &grids(&tris), &rays, width as usize, &expected);
+    assert!(coherent > 0, "{name}: no packet walked slice by slice");
+}
+
 #[test]
 fn packets_equal_brute_force_on_shared_scenes() {
     let scenes = shared_scenes();
