@@ -78,27 +78,29 @@ fn intersect_with<const PREFILTER: bool>(r: &PreparedRay, tri: &[Vec3; 3]) -> Op
     if PREFILTER && certainly_outside([ax, ay], [bx, by], [cx, cy]) {
         return None;
     }
-    let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
+    let (hit, is_hit) = exact_hit([ax, ay, az], [bx, by, bz], [cx, cy, cz], r.sz, r.tmin, r.tmax);
+    is_hit.then_some(hit)
+}
+
+/// The exact test on a ray's sheared corners `a`, `b`, `c` (z not yet scaled by `sz`), the one
+/// place its arithmetic is written: the f64 edge functions (exact signs), `det`, `t`, `u`, `v`
+/// rounded once, and whether that is a hit in `[tmin, tmax]`. No branches (every quantity is
+/// computed, a miss's too), so eight lanes of it vectorize ([`intersect8_prefiltered`]).
+#[inline(always)]
+fn exact_hit(a: [f32; 3], b: [f32; 3], c: [f32; 3], sz: f32, tmin: f32, tmax: f32) -> (TriHit, bool) {
+    let (ax, ay, bx, by, cx, cy) = (a[0] as f64, a[1] as f64, b[0] as f64, b[1] as f64, c[0] as f64, c[1] as f64);
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-        return None;
-    }
+    // Inside (or on an edge) when the signs do not disagree.
+    let inside = !((u < 0.0) | (v < 0.0) | (w < 0.0)) | !((u > 0.0) | (v > 0.0) | (w > 0.0));
     let det = u + v + w;
-    if det == 0.0 {
-        return None;
-    }
-    let az = (r.sz * az) as f64;
-    let bz = (r.sz * bz) as f64;
-    let cz = (r.sz * cz) as f64;
+    let (az, bz, cz) = ((sz * a[2]) as f64, (sz * b[2]) as f64, (sz * c[2]) as f64);
     let t = ((u * az + v * bz + w * cz) / det) as f32;
-    // A t that overflows f32 (either sign: a ray with tmin = -inf and a tiny direction meets a
-    // triangle behind it "at -inf") is no hit.
-    if !(t >= r.tmin && t <= r.tmax && t.is_finite()) {
-        return None;
-    }
-    Some(TriHit { t, u: (v / det) as f32, v: (w / det) as f32 })
+    // det = 0 (the ray in the triangle's plane) is no hit. A t that overflows f32 (either sign:
+    // a ray with tmin = -inf and a tiny direction meets a triangle behind it "at -inf") is none.
+    let hit = inside & (det != 0.0) & (t >= tmin) & (t <= tmax) & t.is_finite();
+    (TriHit { t, u: (v / det) as f32, v: (w / det) as f32 }, hit)
 }
 
 /// The bound on an f32 edge function's rounding error is `(|p| + |q|)·EDGE_ERROR_SCALE +
@@ -177,6 +179,37 @@ pub fn may_hit8(r: &PreparedRay, tris: &[[Vec3; 3]], ids: &[u32]) -> u32 {
     !certainly_outside_tris8(&c, r.org_k, [r.sx, r.sy]) & ((1u32 << n) - 1)
 }
 
+/// Eight rays of one axis permutation in lanes, as the watertight test reads them: origin at
+/// the permutation, shear, and interval ([`PreparedRay`]'s `org_k`, `sx`, `sy`, `sz`, `tmin`,
+/// `tmax`).
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes {
+    pub o: [Lanes; 3],
+    pub s: [Lanes; 3],
+    pub tmin: Lanes,
+    pub tmax: Lanes,
+}
+
+/// [`intersect_prefiltered`] of one triangle against eight rays that share an axis
+/// permutation (`c`: the triangle's corners at that permutation): a hit per lane, and a bit per
+/// lane that hits. Each lane runs the scalar test's [`exact_hit`], so its hit is the scalar
+/// test's bit for bit (a unit test compares them); the lanes are plain arrays the caller's
+/// target features vectorize (f64 in two halves of four). A packet tests a chunk's rays so when the
+/// pre-filter keeps several of them.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // `l` is the lane of every array
+pub fn intersect8_prefiltered(c: &[[f32; 3]; 3], r: &RayLanes) -> ([TriHit; LANES], u32) {
+    let mut hits = [TriHit { t: 0.0, u: 0.0, v: 0.0 }; LANES];
+    let mut mask = 0u32;
+    for l in 0..LANES {
+        let sheared = |v: usize| shear(c[v], [r.o[0][l], r.o[1][l], r.o[2][l]], [r.s[0][l], r.s[1][l]]);
+        let (hit, is_hit) = exact_hit(sheared(0), sheared(1), sheared(2), r.s[2][l], r.tmin[l], r.tmax[l]);
+        hits[l] = hit;
+        mask |= u32::from(is_hit) << l;
+    }
+    (hits, mask)
+}
+
 /// Keeps `hit` of triangle `tri` as `best` when it is [`closer`]; true when it was. The one
 /// place a candidate replaces the best hit, for every search (single rays, packets, brute
 /// force).
@@ -201,6 +234,65 @@ pub fn closer(t: f32, tri: u32, best_t: f32, best_tri: u32) -> bool {
 mod tests {
     use super::*;
     use gridrt_scene::Ray;
+
+    /// The eight-lane exact test gives each lane the scalar test's result bit for bit: rays of
+    /// every permutation aimed at corners, edge midpoints, inside and outside points of
+    /// triangles of every size (degenerate ones too), with intervals that cut the hit off.
+    #[test]
+    fn intersect8_is_the_scalar_test_lane_by_lane() {
+        let f = |k: u32, s: u32| (k.wrapping_mul(2654435761).rotate_left(s) >> 8) as f32 / (1 << 24) as f32;
+        let (mut hits, mut misses) = (0, 0);
+        for k in 0..4000u32 {
+            let c = Vec3::new(f(k, 1), f(k, 7), f(k, 13)) * 4.0;
+            let e = |s| {
+                Vec3::new(f(k, s) - 0.5, f(k, s + 3) - 0.5, f(k, s + 5) - 0.5) * [0.0, 0.01, 1.0, 3.0][(k % 4) as usize]
+            };
+            // Every fifth triangle degenerate (a corner repeated).
+            let tri = if k % 5 == 0 { [c, c + e(17), c + e(17)] } else { [c, c + e(17), c + e(23)] };
+            let o = Vec3::new(f(k, 2) * 6.0 - 1.0, f(k, 9) * 6.0 - 1.0, f(k, 15) * 6.0 - 1.0);
+            // One direction for the permutation, eight rays around it.
+            let aim = [tri[0], (tri[1] + tri[2]) * 0.5, (tri[0] + tri[1] + tri[2]) / 3.0][(k % 3) as usize];
+            let mut rays = Vec::new();
+            let mut l = 0;
+            while rays.len() < LANES && l < 64 {
+                let jitter =
+                    Vec3::new(f(k + l, 19) - 0.5, f(k + l, 25) - 0.5, f(k + l, 29) - 0.5) * 0.2 * (l % 3) as f32;
+                let (t0, t1) = [(0.0, f32::INFINITY), (0.5, 0.9), (-1.0, 1.0), (0.0, 0.1)][(l % 4) as usize];
+                if let Some(r) = PreparedRay::new(&Ray::new(o, aim + jitter - o, t0, t1))
+                    && rays.first().is_none_or(|f: &PreparedRay| (f.kx, f.ky, f.kz) == (r.kx, r.ky, r.kz))
+                {
+                    rays.push(r);
+                }
+                l += 1;
+            }
+            if rays.len() < LANES {
+                continue;
+            }
+            let lanes = |g: &dyn Fn(&PreparedRay) -> f32| -> Lanes { std::array::from_fn(|i| g(&rays[i])) };
+            let r = RayLanes {
+                o: [lanes(&|r| r.org_k[0]), lanes(&|r| r.org_k[1]), lanes(&|r| r.org_k[2])],
+                s: [lanes(&|r| r.sx), lanes(&|r| r.sy), lanes(&|r| r.sz)],
+                tmin: lanes(&|r| r.tmin),
+                tmax: lanes(&|r| r.tmax),
+            };
+            let p: &[f32; 9] = bytemuck::cast_ref(&tri);
+            let (kx, ky, kz) = (rays[0].kx, rays[0].ky, rays[0].kz);
+            let c = [0, 1, 2].map(|v| [p[3 * v + kx], p[3 * v + ky], p[3 * v + kz]]);
+            let (lane_hits, mask) = intersect8_prefiltered(&c, &r);
+            for (l, ray) in rays.iter().enumerate() {
+                let scalar = intersect_prefiltered(ray, &tri);
+                let bits = |h: TriHit| [h.t.to_bits(), h.u.to_bits(), h.v.to_bits()];
+                assert_eq!(mask >> l & 1 == 1, scalar.is_some(), "triangle {k}, lane {l}");
+                if let Some(h) = scalar {
+                    assert_eq!(bits(lane_hits[l]), bits(h), "triangle {k}, lane {l}");
+                    hits += 1;
+                } else {
+                    misses += 1;
+                }
+            }
+        }
+        assert!(hits > 3000 && misses > 3000, "{hits} hits, {misses} misses");
+    }
 
     /// The eight-lane pre-filter keeps exactly the triangles the scalar pre-filter keeps, for
     /// every batch length and ray permutation, and never one `intersect` would hit and it drops.

@@ -14,10 +14,14 @@ use gridrt_scene::Hit;
 
 use super::frustum::{Lane, LineBounds, SliceWalk, TriangleBox, lines_interval};
 use crate::ray::PreparedRay;
-use crate::triangle::{certainly_outside, intersect_prefiltered, keep_closer, shear};
+use crate::triangle::{RayLanes, certainly_outside, intersect_prefiltered, intersect8_prefiltered, keep_closer, shear};
 
 /// Rays per SIMD chunk.
 pub const LANES: usize = 8;
+
+/// Rays of a chunk the pre-filter keeps from which their exact tests run in lanes
+/// ([`intersect8_prefiltered`]) rather than one by one.
+pub const LANE_TESTS_FROM: u32 = 3;
 
 /// Rays sharing one axis permutation: `start..start + len` of the gathered arrays (padded to
 /// whole chunks of eight).
@@ -201,6 +205,29 @@ fn test_rays(
             let o = [chunk_of(&rays.ox), chunk_of(&rays.oy), chunk_of(&rays.oz)];
             let shear = [chunk_of(&rays.sx), chunk_of(&rays.sy)];
             let mut keep = !certainly_outside8(&corners, &o, &shear) & 0xff;
+            // Several rays kept: their exact tests in lanes (the rest of each ray read from its
+            // lane; padding and removed rays keep placeholder values, and no hit is kept).
+            if keep.count_ones() >= LANE_TESTS_FROM {
+                let (mut sz, mut tmin, mut tmax) = ([1.0; LANES], [0.0; LANES], [0.0; LANES]);
+                for l in 0..LANES {
+                    if let Some(ray) = lanes.get(rays.lane[chunk + l] as usize).and_then(|l| l.ray.as_ref()) {
+                        (sz[l], tmin[l], tmax[l]) = (ray.sz, ray.tmin, ray.tmax);
+                    }
+                }
+                let r = RayLanes { o, s: [shear[0], shear[1], sz], tmin, tmax };
+                let (hits, hit) = intersect8_prefiltered(&corners, &r);
+                keep &= hit;
+                while keep != 0 {
+                    let l = keep.trailing_zeros() as usize;
+                    keep &= keep - 1;
+                    // Padding, a removed ray: no lane.
+                    let i = rays.lane[chunk + l];
+                    if i != u32::MAX {
+                        changed |= keep_closer(&mut best[i as usize], Some(hits[l]), id);
+                    }
+                }
+                continue;
+            }
             while keep != 0 {
                 let k = chunk + keep.trailing_zeros() as usize;
                 keep &= keep - 1;
