@@ -236,13 +236,18 @@ pub fn planes_of(grid: &FlatGrid, tris: &[[Vec3; 3]], policy: CellPlanes, parall
         covered as f64 >= PLANE_MIN_SHARE * all as f64
     };
     let stride = cells.div_ceil(COVERAGE_SAMPLE).max(1);
+    let mut sample = Vec::new();
     if policy == CellPlanes::Auto && stride > 1 {
-        let sample = each_cell(cells.div_ceil(stride), parallel, |k| plane(k * stride));
-        if !covers(&mut sample.into_iter().enumerate().map(|(k, p)| (k * stride, p))) {
+        sample = each_cell(cells.div_ceil(stride), parallel, |k| plane(k * stride));
+        if !covers(&mut sample.iter().enumerate().map(|(k, &p)| (k * stride, p))) {
             return Vec::new();
         }
     }
-    let planes = each_cell(cells, parallel, plane);
+    // The sampled cells' slabs are not computed again.
+    let planes = each_cell(cells, parallel, |j| match sample.get(j / stride) {
+        Some(&p) if j % stride == 0 => p,
+        _ => plane(j),
+    });
     // A grid of at most COVERAGE_SAMPLE occupied cells is its own sample.
     if policy == CellPlanes::Auto && stride == 1 && !covers(&mut planes.iter().copied().enumerate()) {
         return Vec::new();

@@ -279,33 +279,33 @@ impl SliceWalk {
         lanes.clear();
         active.clear();
         let axis = packet_axis(geom, rays)?;
-        let mut ends = (None, None);
+        // The first valid ray's origin and end on the axis (the candidate reference planes) and
+        // its sign there, which every valid ray must share.
+        let mut first_ray: Option<(f64, Option<f64>, bool)> = None;
         for r in rays {
             let clipped = PreparedRay::new(r).and_then(|pr| geom.clip(&pr).map(|g| (pr, g)));
             let lane = match clipped {
                 Some((ray, g)) => {
                     let o = g.o.to_array().map(f64::from);
                     let d = g.d.to_array().map(f64::from);
-                    if ends.0.is_none() {
+                    first_ray.get_or_insert_with(|| {
                         let tmax = ray.walk_t(r.tmax);
-                        let end = (tmax.is_finite()).then(|| o[axis] + d[axis] * tmax as f64);
-                        ends = (Some(o[axis]), end);
-                    }
+                        (o[axis], tmax.is_finite().then(|| o[axis] + d[axis] * tmax as f64), d[axis] > 0.0)
+                    });
                     Lane { ray: Some(ray), o, d, t0: g.t0, t1: g.t1, ..Lane::INVALID }
                 }
                 None => Lane::INVALID,
             };
             lanes.push(lane);
         }
-        // The rays' sign on the axis: the first valid ray's.
-        let positive = lanes.iter().find(|l| l.ray.is_some()).is_none_or(|l| l.d[axis] > 0.0);
+        let positive = first_ray.is_none_or(|f| f.2);
         let res = geom.res[axis];
         let others = [(axis + 1) % 3, (axis + 2) % 3];
         let (mut first, mut last) = (u32::MAX, 0u32);
         let mut single_ray_cells = 0.0;
         // The lines' bounds at the first ray's origin, the first candidate reference plane.
         let mut at_origin = Bounds::EMPTY;
-        let s0 = ends.0.unwrap_or(0.0);
+        let s0 = first_ray.map_or(0.0, |f| f.0);
         for (i, l) in lanes.iter_mut().enumerate() {
             if l.ray.is_none() {
                 continue;
@@ -335,13 +335,13 @@ impl SliceWalk {
         // closer together at. (A common origin, as a camera tile's, has no spread: the end is
         // then not looked at.)
         let spread = |b: &Bounds| (b.c_hi[0] - b.c_lo[0]) + (b.c_hi[1] - b.c_lo[1]);
-        let (s_ref, bounds) = match ends {
-            (None, _) => (0.0, Bounds::EMPTY),
-            (Some(s0), Some(s1)) if spread(&at_origin) != 0.0 => {
+        let (s_ref, bounds) = match first_ray {
+            None => (0.0, Bounds::EMPTY),
+            Some((s0, Some(s1), _)) if spread(&at_origin) != 0.0 => {
                 let at_end = Bounds::of(axis, s1, lanes, active, u32::MAX);
                 if spread(&at_end) < spread(&at_origin) { (s1, at_end) } else { (s0, at_origin) }
             }
-            (Some(s0), _) => (s0, at_origin),
+            Some((s0, ..)) => (s0, at_origin),
         };
         Some(SliceWalk { axis, positive, slices: res, first, last, s_ref, single_ray_cells, bounds, next_start: first })
     }

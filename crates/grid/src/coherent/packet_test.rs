@@ -14,7 +14,9 @@ use gridrt_scene::Hit;
 
 use super::frustum::{Lane, LineBounds, SliceWalk, TriangleBox, lines_interval};
 use crate::ray::PreparedRay;
-use crate::triangle::{RayLanes, certainly_outside, intersect_prefiltered, intersect8_prefiltered, keep_closer, shear};
+use crate::triangle::{
+    RayLanes, certainly_outside, intersect_prefiltered, intersect8_prefiltered, keep_closer, permuted_corners, shear,
+};
 
 /// Rays per SIMD chunk.
 pub const LANES: usize = 8;
@@ -185,10 +187,11 @@ fn test_rays(
     let TriangleTest { tri, id, cull } = *t;
     let mut changed = false;
     let mut live = u32::MAX;
-    let p: &[f32; 9] = bytemuck::cast_ref(tri);
+    // The prepared ray at position `k` of the gathered arrays (none in padding or for a
+    // removed ray; a valid lane always has its ray).
+    let ray_at = |k: usize| lanes.get(rays.lane[k] as usize).and_then(|l| l.ray.as_ref());
     for g in &rays.groups {
-        let [kx, ky, kz] = g.perm;
-        let corners = [0, 1, 2].map(|v| [p[3 * v + kx], p[3 * v + ky], p[3 * v + kz]]);
+        let corners = permuted_corners(tri, g.perm);
         for chunk in (g.start..g.start + g.len).step_by(LANES) {
             let k = chunk / LANES;
             if let Some((walk, b)) = cull {
@@ -210,7 +213,7 @@ fn test_rays(
             if keep.count_ones() >= LANE_TESTS_FROM {
                 let (mut sz, mut tmin, mut tmax) = ([1.0; LANES], [0.0; LANES], [0.0; LANES]);
                 for l in 0..LANES {
-                    if let Some(ray) = lanes.get(rays.lane[chunk + l] as usize).and_then(|l| l.ray.as_ref()) {
+                    if let Some(ray) = ray_at(chunk + l) {
                         (sz[l], tmin[l], tmax[l]) = (ray.sz, ray.tmin, ray.tmax);
                     }
                 }
@@ -220,10 +223,8 @@ fn test_rays(
                 while keep != 0 {
                     let l = keep.trailing_zeros() as usize;
                     keep &= keep - 1;
-                    // Padding, a removed ray: no lane.
-                    let i = rays.lane[chunk + l];
-                    if i != u32::MAX {
-                        changed |= keep_closer(&mut best[i as usize], Some(hits[l]), id);
+                    if ray_at(chunk + l).is_some() {
+                        changed |= keep_closer(&mut best[rays.lane[chunk + l] as usize], Some(hits[l]), id);
                     }
                 }
                 continue;
@@ -231,10 +232,8 @@ fn test_rays(
             while keep != 0 {
                 let k = chunk + keep.trailing_zeros() as usize;
                 keep &= keep - 1;
-                let i = rays.lane[k];
-                // Padding, a removed ray: no lane (a valid lane always has its ray).
-                let Some(ray) = lanes.get(i as usize).and_then(|l| l.ray.as_ref()) else { continue };
-                changed |= keep_closer(&mut best[i as usize], intersect_prefiltered(ray, tri), id);
+                let Some(ray) = ray_at(k) else { continue };
+                changed |= keep_closer(&mut best[rays.lane[k] as usize], intersect_prefiltered(ray, tri), id);
             }
         }
     }
