@@ -39,10 +39,30 @@ fn fails(args: &[&str], needle: &str) {
     assert!(err.contains(needle), "gridrt {args:?}: stderr lacks \"{needle}\":\n{err}");
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gridrt-cli-test-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+/// A path named `name` in a fresh temporary directory, removed with everything under it when
+/// the value is dropped (at the end of the test that made it).
+struct TmpPath {
+    _dir: tempfile::TempDir,
+    path: PathBuf,
+}
+
+impl std::ops::Deref for TmpPath {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for TmpPath {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+fn tmp(name: &str) -> TmpPath {
+    let dir = tempfile::Builder::new().prefix("gridrt-cli-test-").tempdir().unwrap();
+    let path = dir.path().join(name);
+    TmpPath { _dir: dir, path }
 }
 
 fn s(p: &Path) -> &str {
@@ -340,10 +360,12 @@ fn hostile_files_and_sizes_end_in_one_line_errors() {
         ),
     ];
     let mut cases: Vec<(Vec<String>, &str, i32)> = Vec::new();
+    let mut written = Vec::new();
     for (name, bytes, needle) in &files {
         let path = tmp(name);
         std::fs::write(&path, bytes).unwrap();
         cases.push((vec!["info".into(), s(&path).into()], needle, 1));
+        written.push(path);
     }
     let mut uri = base(json!([{"mesh": 0}]), dense);
     uri["buffers"][0]["uri"] = json!("/etc/passwd");

@@ -411,7 +411,8 @@ fn limits_are_honoured_and_name_the_flag() {
 
 #[test]
 fn buffer_uris_stay_inside_the_folder() {
-    let dir = temp_dir("uris");
+    let tmp = temp_dir("uris");
+    let dir = tmp.path();
     let inside = dir.join("scene");
     std::fs::create_dir_all(inside.join("sub")).unwrap();
     std::fs::write(dir.join("secret.bin"), vec![0u8; 64]).unwrap();

@@ -99,7 +99,8 @@ mod tests {
 
     #[test]
     fn paths_stay_inside_the_root() {
-        let dir = std::env::temp_dir().join(format!("xtask-serve-{}", std::process::id()));
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().to_path_buf();
         std::fs::create_dir_all(dir.join("sub")).unwrap();
         std::fs::write(dir.join("index.html"), "x").unwrap();
         std::fs::write(dir.join("sub/a.js"), "x").unwrap();
@@ -108,6 +109,5 @@ mod tests {
         assert_eq!(resolve(&dir, "/../etc/passwd"), None);
         assert_eq!(resolve(&dir, "/missing.js"), None);
         assert_eq!(mime(Path::new("a.wasm")), "application/wasm");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

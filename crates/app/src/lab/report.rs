@@ -289,8 +289,8 @@ mod tests {
         assert!((k - 2.0).abs() < 1e-12 && (b - 1.0).abs() < 1e-12);
         assert!(fit_line(&[(1.0, 1.0)]).is_none());
         assert_eq!(tick(2.0, true), "100");
-        let dir = std::env::temp_dir().join(format!("gridrt-chart-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let c = Chart {
             title: "t".into(),
             x_label: "m".into(),
@@ -304,7 +304,7 @@ mod tests {
             markers: vec![(30.0, "auto".into())],
             x_names: None,
         };
-        save_chart(&dir, "c", &c).unwrap();
+        save_chart(dir, "c", &c).unwrap();
         let svg = std::fs::read_to_string(dir.join("c.svg")).unwrap();
         assert!(svg.contains("<svg") && svg.contains("auto"));
         let png = image::open(dir.join("c.png")).unwrap().to_rgb8();
@@ -316,8 +316,7 @@ mod tests {
             r: Option<[u32; 2]>,
             t: f64,
         }
-        write_rows(&dir, "rows", &[R { m: 1, r: Some([1, 2]), t: 0.5 }, R { m: 2, r: None, t: 0.25 }]).unwrap();
+        write_rows(dir, "rows", &[R { m: 1, r: Some([1, 2]), t: 0.5 }, R { m: 2, r: None, t: 0.25 }]).unwrap();
         assert_eq!(std::fs::read_to_string(dir.join("rows.csv")).unwrap(), "m,r,t\n1,1×2,0.5\n2,,0.25\n");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -149,10 +149,7 @@ pub fn base64(data: &[u8]) -> String {
     s
 }
 
-/// A fresh temporary directory for file-based cases.
-pub fn temp_dir(tag: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("gridrt-scene-test-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh temporary directory for file-based cases, removed when the value is dropped.
+pub fn temp_dir(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(&format!("gridrt-scene-test-{tag}-")).tempdir().unwrap()
 }

@@ -89,7 +89,8 @@ fn embedded_external_and_glb_buffers_load_the_same() {
     };
     let (a, _) = load_slice(&make().glb(), "a.glb", None).unwrap();
     let (b, _) = load_slice(&make().gltf_embedded(), "b.gltf", None).unwrap();
-    let dir = temp_dir("ext");
+    let tmp = temp_dir("ext");
+    let dir = tmp.path();
     let (j, bin) = make().gltf_external("c.bin");
     std::fs::write(dir.join("c.gltf"), j).unwrap();
     std::fs::write(dir.join("c.bin"), bin).unwrap();

@@ -188,12 +188,13 @@ fn malformed_corpus_gives_specific_errors() {
 
 #[test]
 fn file_level_errors_name_the_path() {
-    let dir = temp_dir("files");
+    let tmp = temp_dir("files");
+    let dir = tmp.path();
     let missing = dir.join("nope.glb");
     let e = load_path(&missing).unwrap_err();
     assert!(matches!(e, SceneError::Io { .. }) && e.to_string().contains("nope.glb"), "{e}");
     // A directory is not a scene file.
-    let e = load_path(&dir).unwrap_err();
+    let e = load_path(dir).unwrap_err();
     assert!(matches!(e, SceneError::Io { .. }), "{e}");
     // External buffer that does not exist next to the .gltf.
     let (j, _) = Doc::single_triangle().gltf_external("gone.bin");

@@ -690,7 +690,8 @@ const RANDOM_DOCS: u64 = 24;
 #[test]
 fn poses_agree_with_three_js_on_generated_and_shared_animated_files() {
     let Some(three) = gridrt_testkit::three_js_dir() else { return };
-    let work = temp_dir("three");
+    // Kept when a comparison fails (the failing file stays in `work`); removed at the end.
+    let work = temp_dir("three").keep();
     let docs = [
         ("rigid", rigid_doc()),
         ("skin_u8", skin_doc(5121, 5121)),
