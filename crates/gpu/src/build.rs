@@ -142,8 +142,9 @@ impl GridBuilder {
         let bounds = self.bounds_async(ctx, scene).await?;
         times.record_since("bounds", start);
         let policy = cfg.resolution.unwrap_or(Resolution::Auto);
-        let choice =
-            times.record("resolution", || resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.parallel));
+        let choice = times.record("resolution", || {
+            resolution::choose(tris, &bounds, policy, &cfg.cost, cfg.build.insert, cfg.build.parallel)
+        });
         check_cells(choice.resolution, cfg.cost.max_cells)?;
         let mut g = match cfg.kind {
             GridKind::Macrocell => {

@@ -42,6 +42,12 @@
 //!   so the least sample is not known to be the fastest; the coarser one is known to be smaller
 //!   and to build faster. A sweep of 2026-12-06 had the fastest m below the least sample on seven
 //!   of nine scenes.
+//! - below the interval (bounding-box insertion): when the interval's coarsest sample is the one
+//!   taken, T(m) may keep falling below it (long slivers, whose boxes cross many cells), so the
+//!   curve is extended toward m = 1 until its coarsest sample is no longer taken. Exact
+//!   insertion keeps the interval: a sliver's exact references grow with its length in cells,
+//!   not its box's volume, so box N_m's fall below the interval does not hold for it (the
+//!   README's levers table has both measured).
 //! - exact insertion takes the resolution the auto policy picks for bounding-box insertion.
 //!   With exact N_m the memory term shrinks and T(m) picks grids one sample finer on most
 //!   scenes, which measured no faster (the engine's and the teapot's 7–15% slower) and up to
@@ -288,17 +294,18 @@ pub fn count_refs(tris: &[[Vec3; 3]], bounds: &Aabb, res: [u32; 3], mode: Insert
     tris.iter().map(one).sum()
 }
 
-/// Chooses the resolution for `tris` within `bounds`, for either insertion mode: the auto
-/// policy samples T(m) with bounding-box insertion's N_m whatever the grid's insertion (see
-/// the module doc).
+/// Chooses the resolution for `tris` within `bounds` for a grid of insertion `insert`: the
+/// auto policy samples T(m) with bounding-box insertion's N_m whatever the grid's insertion, and
+/// goes below its interval for bounding-box insertion only (see the module doc).
 pub fn choose(
     tris: &[[Vec3; 3]],
     bounds: &Aabb,
     policy: Resolution,
     model: &CostModel,
+    insert: InsertMode,
     parallel: bool,
 ) -> ResolutionChoice {
-    choose_with(tris, bounds, None, policy, model, parallel)
+    choose_with(tris, bounds, None, policy, model, insert, parallel)
 }
 
 /// [`choose`] with the bounds pass's [`ChunkExtents`] (the same choice, fewer triangles read).
@@ -308,6 +315,7 @@ pub fn choose_with(
     extents: Option<&ChunkExtents>,
     policy: Resolution,
     model: &CostModel,
+    insert: InsertMode,
     parallel: bool,
 ) -> ResolutionChoice {
     let n = tris.len().max(1) as f64;
@@ -321,9 +329,13 @@ pub fn choose_with(
         Resolution::Line => cubic_cells(bounds, (n * r).powf(1.5).min(cap)),
         Resolution::Auto => {
             let resolutions = sample_resolutions(tris.len(), bounds, model);
-            let (counts, _) =
-                count_refs_curve_with(tris, bounds, extents, &resolutions, InsertMode::BoundingBox, parallel);
-            let curve = costed(tris.len(), model, &resolutions, counts);
+            let count =
+                |r: &[[u32; 3]]| count_refs_curve_with(tris, bounds, extents, r, InsertMode::BoundingBox, parallel).0;
+            let curve = costed(tris.len(), model, &resolutions, count(&resolutions));
+            let curve = match insert {
+                InsertMode::BoundingBox => extended_below(curve, tris.len(), bounds, model, count),
+                InsertMode::Exact => curve,
+            };
             let best = model.best_sample(&curve).expect("at least one sample");
             return ResolutionChoice { resolution: best.resolution, policy, curve };
         }
@@ -714,7 +726,52 @@ pub fn sample_curve(
     parallel: bool,
 ) -> Vec<CostSample> {
     let resolutions = sample_resolutions(tris.len(), bounds, model);
-    samples_at(tris, bounds, model, &resolutions, mode, parallel)
+    let curve = samples_at(tris, bounds, model, &resolutions, mode, parallel);
+    match mode {
+        InsertMode::BoundingBox => {
+            extended_below(curve, tris.len(), bounds, model, |r| count_refs_curve(tris, bounds, r, mode, parallel).0)
+        }
+        InsertMode::Exact => curve,
+    }
+}
+
+/// `curve` extended below its interval while its coarsest sample is the one
+/// [`CostModel::best_sample`] takes and coarser grids exist: T(m) may keep falling there (long
+/// slivers, whose boxes cross many cells at m = ∛N, cost least with far fewer cells). Each
+/// round samples `model.samples / 2` more m geometrically from an eighth of the coarsest m (at
+/// least 1) up to below it, with `count` giving their N_m in one pass; the rounds stop at m = 1.
+fn extended_below(
+    mut curve: Vec<CostSample>,
+    triangles: usize,
+    bounds: &Aabb,
+    model: &CostModel,
+    count: impl Fn(&[[u32; 3]]) -> Vec<u64>,
+) -> Vec<CostSample> {
+    loop {
+        let Some(first) = curve.first() else { return curve };
+        if model.best_sample(&curve).map(|s| s.cells) != Some(first.cells) || first.cells <= 1 {
+            return curve;
+        }
+        let (top, k) = (first.m, (model.samples / 2).max(2));
+        let bottom = (top / 8.0).max(1.0);
+        let mut below: Vec<[u32; 3]> = Vec::new();
+        for i in 0..k {
+            let m = bottom * (top / bottom).powf(i as f64 / k as f64);
+            let res = cubic_cells(bounds, m * m * m);
+            let cells = res.iter().map(|&x| x as u64).product::<u64>();
+            if cells < first.cells && below.last().is_none_or(|l| l.iter().map(|&x| x as u64).product::<u64>() < cells)
+            {
+                below.push(res);
+            }
+        }
+        if below.is_empty() {
+            return curve;
+        }
+        let counts = count(&below);
+        let mut extended = costed(triangles, model, &below, counts);
+        extended.append(&mut curve);
+        curve = extended;
+    }
 }
 
 /// The resolutions [`sample_curve`] samples for `triangles` triangles within `bounds`.

@@ -341,7 +341,15 @@ fn build_on(
     let (bounds, extents) = times.record("bounds", || triangle_bounds_and_extents(tris, cfg.build.parallel));
     let choose = |times: &mut PhaseTimes, policy: Resolution| {
         times.record("resolution", || {
-            resolution::choose_with(tris, &bounds, Some(&extents), policy, &cfg.cost, cfg.build.parallel)
+            resolution::choose_with(
+                tris,
+                &bounds,
+                Some(&extents),
+                policy,
+                &cfg.cost,
+                cfg.build.insert,
+                cfg.build.parallel,
+            )
         })
     };
     // Every resolution, explicit or chosen, obeys the same cell limit as the auto choice.

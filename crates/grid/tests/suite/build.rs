@@ -11,6 +11,40 @@ fn tris_of(kind: SceneKind, size: u32) -> Vec<[Vec3; 3]> {
     procedural::generate(kind, size, 5).mesh.triangles()
 }
 
+/// Below the interval: long slivers' bounding-box references grow with their boxes' volume, so
+/// box insertion's T(m) keeps falling below one cell per triangle; its curve goes down until its
+/// coarsest sample is no longer the one taken. Exact insertion keeps the interval, and a mesh's
+/// curve has its least T(m) inside the interval, where nothing is added.
+#[test]
+fn auto_goes_below_the_interval_only_where_box_counts_keep_falling() {
+    let aware = CostModel::memory_aware();
+    let tris = tris_of(SceneKind::Slivers, 4000);
+    let b = triangle_bounds(&tris);
+    let lo = (tris.len() as f64).cbrt();
+    let boxed = resolution::choose(&tris, &b, Resolution::Auto, &aware, InsertMode::BoundingBox, true);
+    let exact = resolution::choose(&tris, &b, Resolution::Auto, &aware, InsertMode::Exact, true);
+    assert!((exact.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", exact.curve[0].m);
+    assert_eq!(aware.best_sample(&exact.curve).unwrap().cells, exact.curve[0].cells, "the interval's coarsest");
+    assert!(boxed.curve.windows(2).all(|w| w[0].cells < w[1].cells), "{:?}", boxed.curve);
+    let taken = aware.best_sample(&boxed.curve).unwrap();
+    assert_eq!(taken.resolution, boxed.resolution);
+    assert!(boxed.curve[0].m < taken.m && taken.m < 0.8 * lo, "{} taken, interval from {lo}", taken.m);
+    // The interval's samples are the exact curve's resolutions, below them the added ones.
+    let added = boxed.curve.len() - exact.curve.len();
+    assert!(added > 0);
+    let interval: Vec<_> = boxed.curve[added..].iter().map(|s| s.resolution).collect();
+    assert_eq!(interval, exact.curve.iter().map(|s| s.resolution).collect::<Vec<_>>());
+    for s in &boxed.curve[..added] {
+        assert_eq!(s.n_m, resolution::count_refs(&tris, &b, s.resolution, InsertMode::BoundingBox, true), "{s:?}");
+        assert!((s.cost - aware.cost(s.cells, s.n_m, tris.len())).abs() < 1e-9);
+    }
+    // A mesh: the interval alone.
+    let mesh = tris_of(SceneKind::Mountain, 5);
+    let mb = triangle_bounds(&mesh);
+    let curve = resolution::choose(&mesh, &mb, Resolution::Auto, &aware, InsertMode::BoundingBox, true).curve;
+    assert!((curve[0].m / (mesh.len() as f64).cbrt() - 1.0).abs() < 0.2, "{curve:?}");
+}
+
 #[test]
 fn layout_is_consistent_and_sorted() {
     let tris = tris_of(SceneKind::Particles, 3000);
@@ -202,7 +236,7 @@ fn resolution_policies_follow_their_formulas() {
     let b = triangle_bounds(&tris);
     let m = CostModel::default();
     let cells = |p| {
-        let r = resolution::choose(&tris, &b, p, &m, false).resolution;
+        let r = resolution::choose(&tris, &b, p, &m, InsertMode::BoundingBox, false).resolution;
         r.iter().map(|&x| x as f64).product::<f64>()
     };
     let n = tris.len() as f64;
@@ -211,8 +245,17 @@ fn resolution_policies_follow_their_formulas() {
     assert!(near(cells(Resolution::Point), 2.0 * n * 5.0)); // eq. (1): 2N·Tinter/Tstep
     let line = (n * 5.0).powf(1.5).min(m.cell_cap(tris.len()) as f64);
     assert!(near(cells(Resolution::Line), line)); // eq. (2), capped by memory
-    assert_eq!(resolution::choose(&tris, &b, Resolution::Explicit([3, 4, 5]), &m, false).resolution, [3, 4, 5]);
-    assert_eq!(resolution::choose(&tris, &b, Resolution::Cubic(40), &m, false).resolution.iter().max(), Some(&40));
+    assert_eq!(
+        resolution::choose(&tris, &b, Resolution::Explicit([3, 4, 5]), &m, InsertMode::BoundingBox, false).resolution,
+        [3, 4, 5]
+    );
+    assert_eq!(
+        resolution::choose(&tris, &b, Resolution::Cubic(40), &m, InsertMode::BoundingBox, false)
+            .resolution
+            .iter()
+            .max(),
+        Some(&40)
+    );
     for s in ["auto", "point", "line", "density=3.5", "m=64", "10,20,30"] {
         assert!(s.parse::<Resolution>().is_ok(), "{s}");
     }
@@ -228,7 +271,7 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     let b = triangle_bounds(&tris);
     let model = CostModel::default();
     // The auto policy samples box insertion's N_m for either insertion mode.
-    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, true);
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
     let best = choice.curve.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap();
     assert_eq!(best.resolution, choice.resolution);
     assert_eq!(choice.curve, resolution::sample_curve(&tris, &b, &model, InsertMode::BoundingBox, true));
@@ -253,7 +296,9 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         assert!((curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", curve[0].m);
     }
     // Different constants move the optimum: expensive steps give coarser grids.
-    let with_step = |t_step| resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step, ..model }, true);
+    let with_step = |t_step| {
+        resolution::choose(&tris, &b, Resolution::Auto, &CostModel { t_step, ..model }, InsertMode::BoundingBox, true)
+    };
     let (cheap, dear) = (with_step(0.02), with_step(1.0));
     let m = |c: &gridrt_grid::ResolutionChoice| c.resolution.iter().map(|&x| x as f64).product::<f64>();
     assert!(m(&cheap) > m(&dear), "{:?} vs {:?}", cheap.resolution, dear.resolution);
@@ -264,7 +309,7 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
     // T(m) with the memory-aware model's cheaper triangle test.
     assert_eq!((aware.t_setup, aware.t_step, aware.t_inter), (1.0, 0.1, 0.35), "the README's values");
     let t_of = CostModel { t_inter: 0.35, ..model };
-    let choice = resolution::choose(&tris, &b, Resolution::Auto, &aware, true);
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &aware, InsertMode::BoundingBox, true);
     let lo = (tris.len() as f64).cbrt();
     assert!((choice.curve[0].m / lo - 1.0).abs() < 0.2, "{} vs {lo}", choice.curve[0].m);
     for s in &choice.curve {
@@ -291,20 +336,20 @@ fn guess_and_check_counts_exactly_and_picks_the_minimum() {
         let expected = aware.cost(s.cells, s.n_m, tris.len()) + 0.1 * 8.0 * beyond / tris.len() as f64;
         assert!((dram.cost(s.cells, s.n_m, tris.len()) - expected).abs() < 1e-9, "{s:?}");
     }
-    let coarser = resolution::choose(&tris, &b, Resolution::Auto, &dram, true);
+    let coarser = resolution::choose(&tris, &b, Resolution::Auto, &dram, InsertMode::BoundingBox, true);
     assert!(m(&coarser) < m(&choice), "{:?} vs {:?}", coarser.resolution, choice.resolution);
     // A tiny scene's grid fits in the cache: the memory-aware choice is no coarser than the
     // survey's there (the Cornell box's 36 triangles went to 3³ cells without the cache).
     let tiny: Vec<[Vec3; 3]> = tris.iter().step_by((tris.len() / 36).max(1)).take(36).copied().collect();
     let tb = gridrt_grid::triangle_bounds(&tiny);
-    let pick = |m: &CostModel| resolution::choose(&tiny, &tb, Resolution::Auto, m, true);
+    let pick = |m: &CostModel| resolution::choose(&tiny, &tb, Resolution::Auto, m, InsertMode::BoundingBox, true);
     assert!(
         m(&pick(&aware)) > m(&pick(&uncached)),
         "{:?} vs {:?}",
         pick(&aware).resolution,
         pick(&uncached).resolution
     );
-    let survey = resolution::choose(&tris, &b, Resolution::Auto, &model, true);
+    let survey = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
     assert!(m(&choice) < m(&survey), "{:?} vs {:?}", choice.resolution, survey.resolution);
 }
 
@@ -348,8 +393,16 @@ fn guess_and_check_estimate_tracks_the_exact_count() {
                 assert_eq!(with, est, "{name} {mode:?}: the extents changed the counts");
                 let model = CostModel::memory_aware();
                 assert_eq!(
-                    resolution::choose_with(tris, &b, Some(&extents), Resolution::Auto, &model, parallel),
-                    resolution::choose(tris, &b, Resolution::Auto, &model, parallel),
+                    resolution::choose_with(
+                        tris,
+                        &b,
+                        Some(&extents),
+                        Resolution::Auto,
+                        &model,
+                        InsertMode::BoundingBox,
+                        parallel
+                    ),
+                    resolution::choose(tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, parallel),
                     "{name}"
                 );
             }
@@ -390,7 +443,7 @@ fn auto_resolution_never_exceeds_the_reference_limit() {
     let tris = tris_of(SceneKind::Slivers, 20_000);
     let b = triangle_bounds(&tris);
     let model = CostModel { max_cells_per_triangle: 1e4, max_cells: 1 << 27, ..CostModel::default() };
-    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, true);
+    let choice = resolution::choose(&tris, &b, Resolution::Auto, &model, InsertMode::BoundingBox, true);
     let limit = gridrt_grid::build::MAX_REFS;
     assert!(choice.curve.iter().any(|s| s.n_m > limit), "the test needs unbuildable samples: {:?}", choice.curve);
     let chosen = choice.curve.iter().find(|s| s.resolution == choice.resolution).unwrap();

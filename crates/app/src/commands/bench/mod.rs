@@ -420,8 +420,15 @@ fn auto_check(sc: &LabScene, sets: &[RayBatch], args: &BenchArgs, cost: &CostMod
     let cfg = GridConfig { cost: *cost, ..GridConfig::default() };
     // The resolution the flat build's auto policy picks, without building that grid.
     let bounds = gridrt_grid::triangle_bounds_with(&sc.tris, cfg.build.parallel);
-    let auto =
-        gridrt_grid::resolution::choose(&sc.tris, &bounds, Resolution::Auto, cost, cfg.build.parallel).resolution;
+    let auto = gridrt_grid::resolution::choose(
+        &sc.tris,
+        &bounds,
+        Resolution::Auto,
+        cost,
+        cfg.build.insert,
+        cfg.build.parallel,
+    )
+    .resolution;
     let opts = TraceOptions::MAILBOX;
     let mut points = Vec::new();
     for k in -4i32..=4 {

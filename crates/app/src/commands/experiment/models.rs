@@ -87,7 +87,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 }
                 pb.inc(1);
             }
-            let chosen = choose(&tris, &bounds, Resolution::Auto, &cost, true);
+            let chosen = choose(&tris, &bounds, Resolution::Auto, &cost, InsertMode::BoundingBox, true);
             let choice_refs = count_refs(&tris, &bounds, chosen.resolution, InsertMode::BoundingBox, true);
             let at_choice = if choice_refs <= REF_BUDGET {
                 Some(measure(&tris, chosen.resolution, &rays, None, 2)?)
