@@ -6,6 +6,8 @@
 
 use eframe::egui;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
+use gridrt_grid::GridConfig;
+use gridrt_grid::cell_plane::CellPlanes;
 
 use super::GridrtApp;
 use super::errors::ErrorKind;
@@ -83,7 +85,7 @@ impl GridrtApp {
                     self.fail_smoke(ctx, e);
                 }
                 Err(e) => {
-                    self.errors.report(ErrorKind::Build(self.settings.grid), e.clone());
+                    self.errors.report(ErrorKind::Build(self.wanted_grid()), e.clone());
                     self.fail_smoke(ctx, e);
                 }
             }
@@ -104,7 +106,7 @@ impl GridrtApp {
             && self.ready.is_none()
             && let Some(scene) = &self.scene
         {
-            let want = self.settings.grid;
+            let want = self.wanted_grid();
             let pose = self.timeline.as_ref().map(|t| t.wanted()).filter(|_| scene.loaded.player.is_some());
             let on_gpu = self.gpu_build().is_some() && gridrt_gpu::build::GridBuilder::supports(&want);
             let have = self.built.as_ref().map(|b| {
@@ -202,6 +204,11 @@ impl GridrtApp {
     }
 
     /// The device to build on when the settings ask for GPU builds.
+    /// The structure the settings ask for, as it is built ([`as_built`]).
+    fn wanted_grid(&self) -> GridConfig {
+        as_built(self.settings.grid, cfg!(not(target_arch = "wasm32")) && self.settings.cpu_trace)
+    }
+
     fn gpu_build(&self) -> Option<crate::gui::built::GpuBuild> {
         if !self.settings.gpu_build {
             return None;
@@ -249,6 +256,33 @@ impl GridrtApp {
         // `--camera framed|interior`: aimed with the first structure.
         if let Some(view) = self.initial_camera.take() {
             self.view_camera(view);
+        }
+    }
+}
+
+/// `grid` as the app builds it when the CPU traces (`cpu_trace`) or the GPU does: under auto,
+/// cell slabs only for the CPU (the GPU kernels never read them, so a rebuild every frame would
+/// pay for nothing; switching to CPU tracing rebuilds with them).
+fn as_built(mut grid: GridConfig, cpu_trace: bool) -> GridConfig {
+    if grid.cell_planes == CellPlanes::Auto && !cpu_trace {
+        grid.cell_planes = CellPlanes::Off;
+    }
+    grid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slabs_under_auto_only_for_cpu_tracing() {
+        let auto = GridConfig::default();
+        assert_eq!(auto.cell_planes, CellPlanes::Auto);
+        assert_eq!(as_built(auto, true), auto);
+        assert_eq!(as_built(auto, false), GridConfig { cell_planes: CellPlanes::Off, ..auto });
+        for explicit in [CellPlanes::On, CellPlanes::Off] {
+            let g = GridConfig { cell_planes: explicit, ..auto };
+            assert_eq!((as_built(g, true), as_built(g, false)), (g, g));
         }
     }
 }

@@ -125,7 +125,8 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
             ui.label("cell slabs").on_hover_text(
                 "A slab per occupied cell that holds its triangles: a CPU ray whose segment in \
                  the cell misses it skips the cell's tests (the same hits). Auto: macrocell and \
-                 exact-insertion flat grids of scanned or CAD meshes; not read by packets or the GPU.",
+                 exact-insertion flat grids of scanned or CAD meshes, built only while the CPU traces \
+                 (the GPU never reads them).",
             );
         });
     }
