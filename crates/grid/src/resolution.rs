@@ -332,10 +332,7 @@ pub fn choose_with(
             let count =
                 |r: &[[u32; 3]]| count_refs_curve_with(tris, bounds, extents, r, InsertMode::BoundingBox, parallel).0;
             let curve = costed(tris.len(), model, &resolutions, count(&resolutions));
-            let curve = match insert {
-                InsertMode::BoundingBox => extended_below(curve, tris.len(), bounds, model, count),
-                InsertMode::Exact => curve,
-            };
+            let curve = extended_below(curve, insert, tris.len(), bounds, model, count);
             let best = model.best_sample(&curve).expect("at least one sample");
             return ResolutionChoice { resolution: best.resolution, policy, curve };
         }
@@ -727,26 +724,26 @@ pub fn sample_curve(
 ) -> Vec<CostSample> {
     let resolutions = sample_resolutions(tris.len(), bounds, model);
     let curve = samples_at(tris, bounds, model, &resolutions, mode, parallel);
-    match mode {
-        InsertMode::BoundingBox => {
-            extended_below(curve, tris.len(), bounds, model, |r| count_refs_curve(tris, bounds, r, mode, parallel).0)
-        }
-        InsertMode::Exact => curve,
-    }
+    extended_below(curve, mode, tris.len(), bounds, model, |r| count_refs_curve(tris, bounds, r, mode, parallel).0)
 }
 
-/// `curve` extended below its interval while its coarsest sample is the one
-/// [`CostModel::best_sample`] takes and coarser grids exist: T(m) may keep falling there (long
-/// slivers, whose boxes cross many cells at m = ∛N, cost least with far fewer cells). Each
-/// round samples `model.samples / 2` more m geometrically from an eighth of the coarsest m (at
-/// least 1) up to below it, with `count` giving their N_m in one pass; the rounds stop at m = 1.
+/// `curve` extended below its interval, for a grid of bounding-box insertion `insert`, while
+/// its coarsest sample is the one [`CostModel::best_sample`] takes and coarser grids exist: T(m)
+/// may keep falling there (long slivers, whose boxes cross many cells at m = ∛N, cost least with
+/// far fewer cells). Each round samples `model.samples / 2` more m geometrically from an eighth
+/// of the coarsest m (at least 1) up to below it, with `count` giving their N_m in one pass; the
+/// rounds stop at m = 1. Exact insertion keeps the interval (see the module doc).
 fn extended_below(
     mut curve: Vec<CostSample>,
+    insert: InsertMode,
     triangles: usize,
     bounds: &Aabb,
     model: &CostModel,
     count: impl Fn(&[[u32; 3]]) -> Vec<u64>,
 ) -> Vec<CostSample> {
+    if insert == InsertMode::Exact {
+        return curve;
+    }
     loop {
         let Some(first) = curve.first() else { return curve };
         if model.best_sample(&curve).map(|s| s.cells) != Some(first.cells) || first.cells <= 1 {
@@ -754,14 +751,15 @@ fn extended_below(
         }
         let (top, k) = (first.m, (model.samples / 2).max(2));
         let bottom = (top / 8.0).max(1.0);
-        let mut below: Vec<[u32; 3]> = Vec::new();
+        // Distinct resolutions in increasing cells, all coarser than the curve's first.
+        let (mut below, mut below_cells): (Vec<[u32; 3]>, u64) = (Vec::new(), 0);
         for i in 0..k {
             let m = bottom * (top / bottom).powf(i as f64 / k as f64);
             let res = cubic_cells(bounds, m * m * m);
-            let cells = res.iter().map(|&x| x as u64).product::<u64>();
-            if cells < first.cells && below.last().is_none_or(|l| l.iter().map(|&x| x as u64).product::<u64>() < cells)
-            {
+            let cells = cells_of(&res);
+            if below_cells < cells && cells < first.cells {
                 below.push(res);
+                below_cells = cells;
             }
         }
         if below.is_empty() {
@@ -807,13 +805,18 @@ pub fn samples_at(
     costed(tris.len(), model, resolutions, counts)
 }
 
+/// The cells of a resolution.
+fn cells_of(res: &[u32; 3]) -> u64 {
+    res.iter().map(|&x| x as u64).product()
+}
+
 /// The curve's samples from their resolutions and N_m.
 fn costed(triangles: usize, model: &CostModel, resolutions: &[[u32; 3]], counts: Vec<u64>) -> Vec<CostSample> {
     resolutions
         .iter()
         .zip(counts)
         .map(|(&res, n_m)| {
-            let cells = res.iter().map(|&x| x as u64).product::<u64>();
+            let cells = cells_of(&res);
             let mg = (cells as f64).cbrt();
             CostSample {
                 m: mg,

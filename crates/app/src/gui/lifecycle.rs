@@ -203,12 +203,12 @@ impl GridrtApp {
         Some(Timeline::new(clip, c.clamp(start.seconds.unwrap_or(c.start)), !start.paused))
     }
 
-    /// The device to build on when the settings ask for GPU builds.
     /// The structure the settings ask for, as it is built ([`as_built`]).
     fn wanted_grid(&self) -> GridConfig {
-        as_built(self.settings.grid, cfg!(not(target_arch = "wasm32")) && self.settings.cpu_trace)
+        as_built(self.settings.grid, self.settings.cpu_traces())
     }
 
+    /// The device to build on when the settings ask for GPU builds.
     fn gpu_build(&self) -> Option<crate::gui::built::GpuBuild> {
         if !self.settings.gpu_build {
             return None;

@@ -322,7 +322,7 @@ impl GridrtApp {
             heat_max: self.settings.heat_max,
             size,
             structure: b.id,
-            cpu_trace: cfg!(not(target_arch = "wasm32")) && self.settings.cpu_trace,
+            cpu_trace: self.settings.cpu_traces(),
         };
         // Smoke mode renders its N frames back to back.
         let smoke_wants_frame =

@@ -35,6 +35,13 @@ pub struct Settings {
     pub explainer: super::explainer::ExplainerState,
 }
 
+impl Settings {
+    /// Whether the CPU traces the frames (only natively; the browser always traces on the GPU).
+    pub fn cpu_traces(&self) -> bool {
+        cfg!(not(target_arch = "wasm32")) && self.cpu_trace
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
