@@ -54,8 +54,8 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     let a = vs.a;
     let b = vs.b;
     let c = vs.c;
-    var n = normalize(cross(b - a, c - a));
-    let dir = normalize(r.dir_tmax.xyz);
+    var n = normalize_scaled(cross(normalize_scaled(b - a), normalize_scaled(c - a)));
+    let dir = normalize_scaled(r.dir_tmax.xyz);
     if dot(n, dir) > 0.0 {
         n = -n;
     }
@@ -65,12 +65,12 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if view == 2u {
         let dist = h.t * length(r.dir_tmax.xyz);
-        let x = (dist - shade.depth_near) / max(shade.depth_far - shade.depth_near, 1e-20);
+        let x = (dist - shade.depth_near) / max(shade.depth_far - shade.depth_near, MIN_POSITIVE_F32);
         pixels[i] = pack_rgba(vec3<f32>(1.0 - clamp(x, 0.0, 1.0)));
         return;
     }
     let p = hit_point(r, h.t);
-    let l = normalize(shade.light - p);
+    let l = normalize_scaled(shade.light - p);
     let lit = select(0.0, 1.0, shadow_hits[i].triangle == NO_HIT);
     let head = abs(dot(n, -dir));
     let diffuse = max(dot(n, l), 0.0) * lit;

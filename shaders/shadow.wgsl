@@ -24,6 +24,6 @@ fn shadow_rays_from_hits(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = hit_point(primary[i], h.t);
     // Stops short of the surface by a distance relative to the scene size.
     let from_light = p - shade.light;
-    let eps = 1e-4 * shade.diagonal / max(length(from_light), 1e-20);
+    let eps = 1e-4 * shade.diagonal / max(length_scaled(from_light), MIN_POSITIVE_F32);
     shadow_rays[i] = Ray(vec4<f32>(shade.light, 0.0), vec4<f32>(from_light, 1.0 - eps));
 }

@@ -32,10 +32,17 @@ fn begin_ray(i: u32) -> bool {
     if !ray.valid {
         return false;
     }
-    // In the walk's units (PreparedRay.t_scale), as on the CPU (GridGeometry::clip).
+    // In the walk's units (PreparedRay.t_scale), a scaled walk's segment widened by an ulp on
+    // each side, as on the CPU (GridGeometry::clip).
+    var tmin = ray.tmin;
+    var tmax = ray.tmax;
+    if ray.t_scale > 1.0 {
+        tmin = -next_up_f32(-tmin);
+        tmax = next_up_f32(tmax);
+    }
     top_ray = clip_ray((ray.org - params.grid_min.xyz) * params.inv_cell.xyz,
                        (ray.dir * (1.0 / ray.t_scale)) * params.inv_cell.xyz, params.res,
-                       ray.tmin * ray.t_scale, ray.tmax * ray.t_scale);
+                       tmin * ray.t_scale, tmax * ray.t_scale);
     return !ray_is_empty(top_ray);
 }
 
@@ -65,9 +72,24 @@ fn test_cell(first: u32, end: u32, t_exit: f32) -> bool {
 }
 
 // True when the best hit lies before `t_exit` (the end of a cell or block just crossed, in the
-// walk's units).
+// walk's units), compared in the ray's units as hits are rounded (CPU: ClosestHit::done_at).
 fn done_at(t_exit: f32) -> bool {
-    return best.t * ray.t_scale < t_exit;
+    return best.t < t_exit * (1.0 / ray.t_scale);
+}
+
+// The next f32 above `x` (x not NaN; +inf stays): a scaled walk's segment widening.
+fn next_up_f32(x: f32) -> f32 {
+    let b = bitcast<u32>(x);
+    if b == 0x7f800000u {
+        return x;
+    }
+    if (b & 0x7fffffffu) == 0u {
+        return bitcast<f32>(1u);
+    }
+    if (b >> 31u) == 0u {
+        return bitcast<f32>(b + 1u);
+    }
+    return bitcast<f32>(b - 1u);
 }
 
 // Tests one referenced triangle, updating the best hit, the counters and the mailbox.

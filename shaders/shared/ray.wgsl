@@ -24,12 +24,12 @@ struct PreparedRay {
     sy: f32,
     sz: f32,
     // A power of two >= 1: the walk's t per unit of the ray's (CPU: PreparedRay::t_scale; a
-    // direction of 2^64 or more walks scaled down by it, so that grid space stays within f32).
+    // direction of 2^16 or more walks scaled down by it, so that grid space stays within f32).
     t_scale: f32,
     valid: bool,
 }
 
-const WALK_DIR_MAX: f32 = 18446744073709551616.0; // 2^64
+const WALK_DIR_MAX: f32 = 65536.0; // 2^16
 
 // Index of the largest component (the dominant axis); ties go to the lowest axis.
 // CPU port: crates/grid/src/traversal/mod.rs `argmax3`.
@@ -76,7 +76,7 @@ fn prepare_ray(r: Ray) -> PreparedRay {
     let m = max(max(abs(p.dir.x), abs(p.dir.y)), abs(p.dir.z));
     p.t_scale = 1.0;
     if m >= WALK_DIR_MAX {
-        p.t_scale = bitcast<f32>(((bitcast<u32>(m) >> 23u) - 63u) << 23u);
+        p.t_scale = bitcast<f32>(((bitcast<u32>(m) >> 23u) - 15u) << 23u);
     }
     return p;
 }

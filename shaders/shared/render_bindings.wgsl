@@ -42,6 +42,28 @@ fn camera_ray(cam: Camera, x: u32, y: u32) -> Ray {
     return Ray(vec4<f32>(cam.eye, 0.0), vec4<f32>(d, inf()));
 }
 
+// A vector's length and direction at any scene scale (its squared length would leave f32 beyond
+// about 1.8e19 or below 1e-19 per component): divided by its largest component first. A zero
+// vector has no direction. CPU twins: crates/scene/src/scaled.rs.
+fn length_scaled(v: vec3<f32>) -> f32 {
+    let m = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    if m > 0.0 {
+        return m * length(v / m);
+    }
+    return m;
+}
+
+fn normalize_scaled(v: vec3<f32>) -> vec3<f32> {
+    let m = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    if m > 0.0 {
+        return normalize(v / m);
+    }
+    return vec3<f32>(0.0);
+}
+
+// The smallest normal f32.
+const MIN_POSITIVE_F32: f32 = 1.17549435e-38;
+
 // The point at parameter t along r.
 fn hit_point(r: Ray, t: f32) -> vec3<f32> {
     return r.origin_tmin.xyz + r.dir_tmax.xyz * t;

@@ -1015,3 +1015,36 @@ fn cpu_render_with_and_without_packets_gives_the_same_hits() {
     let out = ok(&["render", s(&scene), "--backend", "cpu", "--size", "64x48", "-o", s(&tmp("p.png"))]);
     assert!(out.contains("8x8 packets"), "{out}");
 }
+
+/// A scene in nanometres or in light years renders as the same scene in metres: scaled by a
+/// power of two (exact in f32), its auto camera, grid, hits, shadow offsets and shading scale
+/// alike, so the CPU image is the same pixel for pixel, and so is the GPU's. (An absolute floor
+/// on the camera's distance and the grid box once left a 1e-9 scene a dot in one cell, and an
+/// overflowing diagonal left a 1e20 scene without a camera.)
+#[test]
+fn renders_are_the_same_at_every_scale() {
+    let base = tmp("tis.glb");
+    ok(&["gen", "teapot-in-stadium", "--size", "1", "-o", s(&base)]);
+    let (mesh, _) = gridrt_scene::gltf_load::load_path(&base).unwrap();
+    let backends: &[&str] = if skip_gpu() { &["cpu"] } else { &["cpu", "gpu"] };
+    let render = |scene: &Path, backend: &str| {
+        let png = tmp("scaled.png");
+        ok(&["render", s(scene), "--backend", backend, "--size", "96x64", "-o", s(&png)]);
+        image::open(&*png).unwrap().to_rgba8()
+    };
+    for backend in backends {
+        let reference = render(&base, backend);
+        let lit = reference.pixels().filter(|p| p.0[..3] != reference.get_pixel(0, 0).0[..3]).count();
+        assert!(lit > 96 * 64 / 10, "{backend}: the scene covers only {lit} pixels at scale 1");
+        for k in [-60, -30, 30, 60] {
+            let f = 2f32.powi(k);
+            let scaled =
+                gridrt_scene::Mesh { positions: mesh.positions.iter().map(|p| *p * f).collect(), ..mesh.clone() };
+            let path = tmp("scaled.glb");
+            std::fs::write(&path, gridrt_scene::glb_write::to_glb(&scaled, "scale test")).unwrap();
+            let img = render(&path, backend);
+            let off = reference.pixels().zip(img.pixels()).filter(|(a, b)| a != b).count();
+            assert_eq!(off, 0, "{backend} at 2^{k}: {off} pixels differ from the render at scale 1");
+        }
+    }
+}

@@ -4,6 +4,7 @@
 //! The trace kernels' CPU ports live in `gridrt-grid` (each kernel names its port).
 
 use glam::Vec3;
+use gridrt_scene::scaled::{length_scaled, normalize_scaled};
 use gridrt_scene::{Camera, Ray};
 
 use crate::layout::GpuCamera;
@@ -64,7 +65,7 @@ pub fn shadow_ray(shade: &crate::layout::ShadeParams, primary: &Ray, hit: &gridr
     let p = primary.at(hit.t);
     let light = Vec3::from(shade.light);
     let from_light = p - light;
-    let eps = 1e-4 * shade.diagonal / from_light.length().max(1e-20);
+    let eps = 1e-4 * shade.diagonal / length_scaled(from_light).max(f32::MIN_POSITIVE);
     Ray::new(light, from_light, 0.0, 1.0 - eps)
 }
 
@@ -109,8 +110,8 @@ pub fn shade_pixel(
         return pack_rgba(Vec3::new(0.08, 0.09, 0.12));
     }
     let [a, b, c] = tri;
-    let mut n = (b - a).cross(c - a).normalize();
-    let dir = primary.d().normalize();
+    let mut n = normalize_scaled(normalize_scaled(b - a).cross(normalize_scaled(c - a)));
+    let dir = normalize_scaled(primary.d());
     if n.dot(dir) > 0.0 {
         n = -n;
     }
@@ -119,12 +120,12 @@ pub fn shade_pixel(
     }
     if view == View::Depth {
         let dist = hit.t * primary.d().length();
-        let x = (dist - shade.depth_near) / (shade.depth_far - shade.depth_near).max(1e-20);
+        let x = (dist - shade.depth_near) / (shade.depth_far - shade.depth_near).max(f32::MIN_POSITIVE);
         return pack_rgba(Vec3::splat(1.0 - x.clamp(0.0, 1.0)));
     }
     let p = primary.at(hit.t);
     let light = Vec3::from(shade.light);
-    let l = (light - p).normalize();
+    let l = normalize_scaled(light - p);
     let lit = if shadow_hit.is_hit() { 0.0 } else { 1.0 };
     let head = n.dot(-dir).abs();
     let diffuse = n.dot(l).max(0.0) * lit;

@@ -280,7 +280,7 @@ pub fn tile_limit(ctx: &GpuContext) -> u32 {
 /// The shading constants of a frame: light, view, heatmap scale, depth range.
 pub fn shade_params(bounds: &Aabb, o: &RenderOptions) -> ShadeParams {
     let radius = bounds.diagonal() * 0.5;
-    let eye_dist = (o.camera.eye - bounds.center()).length();
+    let eye_dist = gridrt_scene::scaled::length_scaled(o.camera.eye - bounds.center());
     ShadeParams {
         light: light_position(bounds).to_array(),
         diagonal: bounds.diagonal(),

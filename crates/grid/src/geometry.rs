@@ -33,6 +33,10 @@ pub struct GridGeometry {
     pub inv_cell: Vec3,
 }
 
+/// The least extent of a grid box on any axis (2^-100, about 8e-31): its cells' reciprocal sizes
+/// stay far within f32 at [`MAX_AXIS_RES`] cells.
+pub const MIN_BOX_EXTENT: f32 = 7.888609e-31;
+
 /// The padded box a grid over `bounds` uses: every axis gets a non-zero extent and a margin.
 pub fn padded_bounds(bounds: &Aabb) -> Aabb {
     if bounds.is_empty() {
@@ -40,10 +44,13 @@ pub fn padded_bounds(bounds: &Aabb) -> Aabb {
     }
     let ext = bounds.extent();
     let big = ext.max_element();
-    // Flat axes (all z equal, a single triangle in a plane) still need a slab of cells.
+    // Flat axes (all z equal, a single triangle in a plane) still need a slab of cells. Both
+    // sizes are relative to the scene (its extent, and its distance from the origin, which
+    // bounds how finely f32 places its corners), so a scene nanometres across gets the cells of
+    // the same scene in metres; only a scene of one point at the origin takes the least box.
     let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
-    let floor = (big * 1e-3).max(scale * 1e-5).max(1e-6);
-    let pad = Vec3::splat((big * 1e-5).max(scale * 4e-7).max(1e-9));
+    let floor = (big * 1e-3).max(scale * 1e-5).max(MIN_BOX_EXTENT);
+    let pad = Vec3::splat((big * 1e-5).max(scale * 4e-7).max(MIN_BOX_EXTENT * 1e-5));
     let mut min = bounds.min - pad;
     let mut max = bounds.max + pad;
     for a in 0..3 {
@@ -87,9 +94,29 @@ impl GridGeometry {
     /// segment misses the grid; its `t` in the walk's units ([`PreparedRay::walk_t`]).
     #[inline]
     pub fn clip(&self, r: &PreparedRay) -> Option<GridRay> {
-        let (tmin, tmax) = (r.walk_t(r.tmin), r.walk_t(r.tmax));
+        let (tmin, tmax) = if r.t_scale > 1.0 { widened(r) } else { (r.tmin, r.tmax) };
+        self.clip_unscaled(r, tmin, tmax)
+    }
+
+    /// [`GridGeometry::clip`] of the segment `[tmin, tmax]` (ray units) as given: for rays whose
+    /// walk is not scaled (`t_scale` 1, which the packets take; they trace a scaled ray alone).
+    #[inline]
+    pub fn clip_unscaled(&self, r: &PreparedRay, tmin: f32, tmax: f32) -> Option<GridRay> {
+        let (tmin, tmax) = (r.walk_t(tmin), r.walk_t(tmax));
         GridRay::clipped((r.org - self.min) * self.inv_cell, r.walk_dir() * self.inv_cell, self.res, tmin, tmax)
     }
+}
+
+/// A scaled walk's segment (a large direction), widened by an ulp of the ray's `t` on each
+/// side: a hit whose exact `t` lies just outside [tmin, tmax] rounds into it, and across a tiny
+/// scene all of its hits' `t` may underflow to zero. An unscaled walk is not widened: there an
+/// ulp is less than the insertion margin (directions below 2^16 over cells of at least 2^-110:
+/// under 2^-23 of a cell at zero), and widening would put subnormal values, slow on x86, into
+/// every walk. Out of line: few rays take it.
+#[cold]
+#[inline(never)]
+fn widened(r: &PreparedRay) -> (f32, f32) {
+    (r.tmin.next_down(), r.tmax.next_up())
 }
 
 /// A ray in grid space (cell `(i, j, k)` is the unit cube at `(i, j, k)`), clipped: the

@@ -3,10 +3,12 @@
 //! triangle can be hit by. Every structure and the brute-force reference start from it.
 //!
 //! A structure walks its cells along the ray in units of `t` ("walk units"), which are the
-//! ray's own unless its direction is huge: a direction beyond 2^64 (per component) would
-//! overflow f32 in grid space (1e30 over cells of 1e-9 is 1e39 cells per unit of `t`), so the
-//! walk takes it scaled down by a power of two, `t_scale`, and its `t` scaled up alike (both
-//! exact). The triangle test keeps the ray as given, so hits stay bit for bit brute force's.
+//! ray's own unless its direction is large: a direction beyond 2^16 (per component) could
+//! overflow f32 in grid space (1e30 over cells of 1e-21, a scene 1e-18 across, is 1e51 cells per
+//! unit of `t`), so the walk takes it scaled down by a power of two, `t_scale`, and its `t`
+//! scaled up alike (both exact). The triangle test keeps the ray as given, so hits stay bit for
+//! bit brute force's; the walk's stop test compares them in the ray's units
+//! ([`PreparedRay::ray_t`]).
 
 use glam::Vec3;
 use gridrt_scene::Ray;
@@ -30,9 +32,10 @@ pub struct PreparedRay {
     pub t_scale: f32,
 }
 
-/// The largest direction component a walk takes as given (2^64): grid space then stays within
-/// f32 for cells down to 2^-60 of a unit.
-const WALK_DIR_MAX: f32 = 18446744073709551616.0;
+/// The largest direction component a walk takes as given (2^16): grid space then stays within
+/// f32 (below 2^126) for cells down to 2^-110 of a unit, the least box
+/// ([`crate::geometry::MIN_BOX_EXTENT`], 2^-100) in [`crate::geometry::MAX_AXIS_RES`] cells.
+const WALK_DIR_MAX: f32 = 65536.0;
 
 impl PreparedRay {
     /// The direction the walks take: `dir / t_scale` (exact, a power of two).
@@ -46,14 +49,24 @@ impl PreparedRay {
     pub fn walk_t(&self, t: f32) -> f32 {
         t * self.t_scale
     }
+
+    /// A walk's `t` back in the ray's units, rounded to f32 as a hit's `t` is: exact, unless it
+    /// underflows (a huge direction across a tiny scene, whose hits' `t` round to zero), where it
+    /// rounds to nearest. Rounding is monotone, so a hit beyond the walk's `t` has a ray `t` no
+    /// smaller than this one.
+    #[inline(always)]
+    pub fn ray_t(&self, walk_t: f32) -> f32 {
+        // 1 / t_scale from the exponent bits (2^k → 2^-k; k ≤ 112): no division per cell.
+        walk_t * f32::from_bits(0x7f00_0000 - self.t_scale.to_bits())
+    }
 }
 
 /// [`PreparedRay::t_scale`] for direction `dir` (finite): 1 unless its largest component `m`
-/// is 2^64 or more, else the power of two that brings `m` into [2^63, 2^64).
+/// is 2^16 or more, else the power of two that brings `m` into [2^15, 2^16).
 #[inline(always)]
 fn walk_scale(dir: Vec3) -> f32 {
     let m = dir.abs().max_element();
-    if m < WALK_DIR_MAX { 1.0 } else { f32::from_bits(((m.to_bits() >> 23) - 63) << 23) }
+    if m < WALK_DIR_MAX { 1.0 } else { f32::from_bits(((m.to_bits() >> 23) - 15) << 23) }
 }
 
 impl PreparedRay {

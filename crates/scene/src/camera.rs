@@ -6,6 +6,9 @@ use serde::{Deserialize, Serialize};
 use crate::mesh::Aabb;
 use crate::ray::Ray;
 
+/// The radius [`Camera::fit`] gives a box of no extent, relative to its largest coordinate.
+const EMPTY_BOX_RADIUS: f32 = 1.0 / (1u32 << 20) as f32;
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
     pub eye: Vec3,
@@ -22,7 +25,14 @@ impl Camera {
     pub fn fit(bounds: &Aabb, aspect: f32) -> Camera {
         let vfov_deg = 45.0f32;
         let center = bounds.center();
-        let radius = (bounds.diagonal() * 0.5).max(1e-6);
+        // Any scale: a scene a few nanometres across is framed as one a few kilometres across.
+        // Only a box of no extent (one point) gets a radius of its own, relative to where it is.
+        let radius = bounds.diagonal() * 0.5;
+        let radius = if radius > 0.0 && radius.is_finite() {
+            radius
+        } else {
+            (center.abs().max_element() * EMPTY_BOX_RADIUS).max(f32::MIN_POSITIVE)
+        };
         let half_v = (vfov_deg.to_radians() * 0.5).tan();
         let half = half_v.min(half_v * aspect).atan();
         let dist = radius / half.sin() * 1.02;
@@ -59,13 +69,10 @@ impl Camera {
     }
 
     /// The unit view direction, or zero when eye and target coincide or their difference
-    /// overflows f32. A difference whose squared length would overflow (eye and target 1e30
-    /// apart) or underflow (1e-30 apart) is scaled by its largest component first.
+    /// overflows f32, at any distance ([`crate::scaled::normalize_scaled`]: eye and target 1e30
+    /// or 1e-30 apart).
     pub fn forward(&self) -> Vec3 {
-        let d = self.target - self.eye;
-        let n = d.normalize_or_zero();
-        let m = d.abs().max_element();
-        if n != Vec3::ZERO || !d.is_finite() || m == 0.0 { n } else { (d / m).normalize_or_zero() }
+        crate::scaled::normalize_scaled(self.target - self.eye)
     }
 
     /// Orthonormal basis (right, up, forward) with a fallback up vector when looking along it.
@@ -90,6 +97,24 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The framing camera of a box scaled by a power of two is the same camera scaled alike,
+    /// from 2^-120 to 2^100: no absolute floor on its distance, no overflow of the diagonal. A
+    /// box of one point still gets a camera that looks at it.
+    #[test]
+    fn fit_frames_every_scale_alike() {
+        let b = Aabb { min: Vec3::new(-1.0, 0.5, -2.0), max: Vec3::new(3.0, 2.0, 1.0) };
+        let c = Camera::fit(&b, 1.5);
+        for k in (-120..=100).step_by(10) {
+            let s = 2f32.powi(k);
+            let f = Camera::fit(&Aabb { min: b.min * s, max: b.max * s }, 1.5);
+            assert_eq!((f.eye / s, f.target / s, f.forward()), (c.eye, c.target, c.forward()), "2^{k}");
+        }
+        for p in [Vec3::ZERO, Vec3::new(1e-30, 0.0, 0.0), Vec3::splat(1e30)] {
+            let cam = Camera::fit(&Aabb { min: p, max: p }, 1.0);
+            assert!(cam.eye.is_finite() && cam.eye != p && cam.forward() != Vec3::ZERO, "{p}: {cam:?}");
+        }
+    }
 
     /// The view direction of cameras whose eye-to-target distance squared leaves f32 (1e30 and
     /// 1e-30 apart) is still the unit direction; coincident or overflowing ones have none.

@@ -18,6 +18,7 @@ pub mod procedural;
 pub mod ray;
 pub mod rays;
 pub mod rng;
+pub mod scaled;
 
 pub use camera::Camera;
 pub use error::{RayFileError, SceneError};

@@ -71,8 +71,9 @@ impl Aabb {
         (self.min + self.max) * 0.5
     }
 
+    /// The length of the box's diagonal, at any scale ([`crate::scaled::length_scaled`]).
     pub fn diagonal(&self) -> f32 {
-        self.extent().length()
+        crate::scaled::length_scaled(self.extent())
     }
 }
 

@@ -2,6 +2,7 @@
 //! `--camera auto` does ([`Camera::fit`]).
 
 use glam::Vec3;
+use gridrt_scene::scaled::{length_scaled, normalize_scaled};
 use gridrt_scene::{Aabb, Camera};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,15 +30,16 @@ impl Orbit {
     /// The orbit through a given camera (its eye, target and field of view).
     pub fn from_camera(cam: &Camera, bounds: &Aabb) -> Orbit {
         let offset = cam.eye - cam.target;
-        let distance = offset.length().max(1e-6);
-        let dir = offset / distance;
+        // Any scene scale: no absolute floor (a scene nanometres across keeps its distances).
+        let distance = length_scaled(offset).max(f32::MIN_POSITIVE);
+        let dir = normalize_scaled(offset);
         Orbit {
             target: cam.target,
             yaw: dir.x.atan2(dir.z),
             pitch: dir.y.clamp(-1.0, 1.0).asin().clamp(-MAX_PITCH, MAX_PITCH),
             distance,
             vfov_deg: cam.vfov_deg,
-            scale: bounds.diagonal().max(distance).max(1e-6),
+            scale: bounds.diagonal().max(distance),
         }
     }
 
@@ -55,7 +57,7 @@ impl Orbit {
     /// Moves the target in the view plane by a fraction of the view height.
     pub fn pan(&mut self, dx: f32, dy: f32) {
         let cam = self.camera();
-        let fwd = (cam.target - cam.eye).normalize();
+        let fwd = cam.forward();
         let right = fwd.cross(Vec3::Y).normalize_or(Vec3::X);
         let up = right.cross(fwd);
         let h = 2.0 * self.distance * (self.vfov_deg.to_radians() * 0.5).tan();
@@ -71,6 +73,23 @@ impl Orbit {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The orbit of a scene nanometres or light years across is the orbit at scale 1, scaled
+    /// (no absolute floor on its distance or zoom), and it still zooms.
+    #[test]
+    fn orbits_keep_their_shape_at_every_scale() {
+        let b = Aabb { min: Vec3::splat(-1.0), max: Vec3::new(3.0, 1.0, 1.0) };
+        let o = Orbit::fit(&b, 1.5);
+        for k in [-100, -60, 60, 100] {
+            let s = 2f32.powi(k);
+            let mut so = Orbit::fit(&Aabb { min: b.min * s, max: b.max * s }, 1.5);
+            assert_eq!((so.yaw, so.pitch), (o.yaw, o.pitch), "2^{k}");
+            assert!((so.distance / s - o.distance).abs() <= 1e-6 * o.distance, "2^{k}: {}", so.distance);
+            let d = so.distance;
+            so.zoom(0.5);
+            assert!((so.distance - d * 0.5).abs() <= 1e-6 * d, "2^{k}: zoom {d} → {}", so.distance);
+        }
+    }
 
     #[test]
     fn an_orbit_reproduces_its_camera_and_moves_sensibly() {

@@ -122,7 +122,7 @@ pub fn framed_camera(tris: &[[Vec3; 3]], bounds: &Aabb, probe: &AnyGrid, aspect:
         if new_half_v > 0.95 * half_v {
             new_half_v = 0.85 * half_v;
         }
-        let dist = (cam.target - cam.eye).length();
+        let dist = gridrt_scene::scaled::length_scaled(cam.target - cam.eye);
         cam =
             Camera { target: cam.eye + dir * dist, vfov_deg: (2.0 * new_half_v.atan()).to_degrees().max(0.05), ..cam };
     }

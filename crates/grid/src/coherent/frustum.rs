@@ -273,8 +273,8 @@ fn packet_axis(geom: &GridGeometry, rays: &[Ray]) -> Option<usize> {
 
 impl SliceWalk {
     /// Prepares `rays` as `lanes` and chooses the walk axis ([`packet_axis`]), which every
-    /// valid ray must cross with the same sign. `None` for an incoherent packet (trace its rays
-    /// one by one). `active` receives the valid lanes.
+    /// valid ray must cross with the same sign. `None` for an incoherent packet, or one with a
+    /// ray of a scaled walk (trace its rays one by one). `active` receives the valid lanes.
     pub fn new(geom: &GridGeometry, rays: &[Ray], lanes: &mut Vec<Lane>, active: &mut Vec<u32>) -> Option<SliceWalk> {
         lanes.clear();
         active.clear();
@@ -283,7 +283,14 @@ impl SliceWalk {
         // its sign there, which every valid ray must share.
         let mut first_ray: Option<(f64, Option<f64>, bool)> = None;
         for r in rays {
-            let clipped = PreparedRay::new(r).and_then(|pr| geom.clip(&pr).map(|g| (pr, g)));
+            let pr = PreparedRay::new(r);
+            // A ray walked at a scale (a direction of 2^16 or more) is traced alone, where its
+            // walk widens its segment and stops by its hits' rounded `t` (GridGeometry::clip,
+            // ClosestHit::done_at): the packet is traced as single rays.
+            if pr.is_some_and(|p| p.t_scale > 1.0) {
+                return None;
+            }
+            let clipped = pr.and_then(|pr| geom.clip_unscaled(&pr, pr.tmin, pr.tmax).map(|g| (pr, g)));
             let lane = match clipped {
                 Some((ray, g)) => {
                     let o = g.o.to_array().map(f64::from);

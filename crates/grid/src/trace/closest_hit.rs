@@ -44,9 +44,6 @@ pub struct ClosestHit<'a> {
     /// The ray, prepared for the watertight triangle test.
     pub ray: PreparedRay,
     best: Hit,
-    /// The best hit's `t` in the walk's units ([`PreparedRay::walk_t`]), kept with it so that
-    /// the stop test at every cell is one comparison.
-    best_walk_t: f32,
     stats: RayStats,
     mailbox: Option<Mailbox>,
     /// [`Query::Any`]: done at the first hit.
@@ -124,21 +121,20 @@ impl<'a> ClosestHit<'a> {
             keep &= keep - 1;
             let t = &self.tris[tri as usize];
             let hit = if PREFILTER { intersect(&self.ray, t) } else { intersect_prefiltered(&self.ray, t) };
-            if keep_closer(&mut self.best, hit, tri) {
-                self.best_walk_t = self.ray.walk_t(self.best.t);
-                if self.any {
-                    return true;
-                }
+            if keep_closer(&mut self.best, hit, tri) && self.any {
+                return true;
             }
         }
         false
     }
 
     /// True when the best hit lies before `t_exit` (the end of a cell or block just crossed, in
-    /// the walk's units: [`PreparedRay::walk_t`]).
+    /// the walk's units: [`PreparedRay::walk_t`]), compared in the ray's units as the hits are
+    /// rounded ([`PreparedRay::ray_t`]): a later hit whose `t` rounds to the best one's (a tie
+    /// the triangle index breaks) keeps the walk going.
     #[inline]
     pub fn done_at(&self, t_exit: f32) -> bool {
-        self.best_walk_t < t_exit
+        self.best.t < self.ray.ray_t(t_exit)
     }
 }
 
@@ -188,7 +184,6 @@ impl<'a> ClosestHit<'a> {
             tris,
             ray: PreparedRay::new(ray)?,
             best: Hit::MISS,
-            best_walk_t: Hit::MISS.t,
             stats: RayStats::default(),
             mailbox: opts.mailbox.then(Mailbox::default),
             any: opts.query == Query::Any,

@@ -331,3 +331,36 @@ fn hostile_rays_as_packets_equal_brute_force() {
         }
     }
 }
+
+/// A scene scaled by a power of two (exact in f32) gets the same grid at every scale from 2^-90
+/// to 2^90: the same resolution and the same cells and references (a grid box with an absolute
+/// floor once put a scene nanometres across into one cell), and its rays, scaled alike, the same
+/// hits. Every kind and insertion.
+#[test]
+fn grids_are_the_same_at_every_scale() {
+    let (_, tris) = scene(6);
+    // Rays whose direction components stay normal f32 at every scale (the hostile subnormal
+    // and huge ones would underflow or overflow there, and are other rays then).
+    let ordinary = |r: &Ray| r.d().to_array().iter().all(|c| *c == 0.0 || (1e-6..1e6).contains(&c.abs()));
+    let rays: Vec<Ray> = rays(&tris, 6, 1500).into_iter().filter(ordinary).collect();
+    for kind in GridKind::ALL {
+        for insert in InsertMode::ALL {
+            let cfg = GridConfig { kind, build: BuildOptions { insert, parallel: true }, ..GridConfig::default() };
+            let (grid, _) = structure::build(&tris, &cfg).expect("unit scale");
+            let (hits, _) = grid.trace_batch(&tris, &rays, TraceOptions::MAILBOX, true);
+            for k in [-90, -60, -30, 30, 60, 90] {
+                let s = 2f32.powi(k);
+                let scaled: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(|p| p * s)).collect();
+                let what = format!("{kind} {insert:?} at 2^{k}");
+                let (g, _) = structure::build(&scaled, &cfg).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!(g.cells_digest(), grid.cells_digest(), "{what}: another grid than at scale 1");
+                // Origins scaled, directions as given: the same t for the same triangle.
+                let moved: Vec<Ray> = rays.iter().map(|r| Ray::new(r.o() * s, r.d() * s, r.tmin, r.tmax)).collect();
+                let (got, _) = g.trace_batch(&scaled, &moved, TraceOptions::MAILBOX, true);
+                let same = |a: &Hit, b: &Hit| a.triangle == b.triangle && (!a.is_hit() || a.t == b.t);
+                let bad = hits.iter().zip(&got).filter(|(a, b)| !same(a, b)).count();
+                assert_eq!(bad, 0, "{what}: {bad} of {} rays hit otherwise than at scale 1", rays.len());
+            }
+        }
+    }
+}

@@ -146,17 +146,29 @@ enum Built {
     Peer(peers::PeerBvh),
 }
 
-fn build(subject: Subject, tris: &[[Vec3; 3]], cost: &CostModel) -> anyhow::Result<Built> {
+/// Builds `subject`; `None` for a peer library that failed on the scene (it panicked: obvhs'
+/// CWBVH conversion indexes out of bounds on some scenes with coordinates near 1e29), which the
+/// scene's other subjects go on without.
+fn build(subject: Subject, tris: &[[Vec3; 3]], cost: &CostModel) -> anyhow::Result<Option<Built>> {
     Ok(match subject {
         Subject::Grid(kind, insert) => {
             let mut cfg = GridConfig { kind, cost: *cost, ..GridConfig::default() };
             cfg.build.insert = insert;
             let (g, report) = structure::build(tris, &cfg)?;
-            Built::Grid(g, report.stats.memory_bytes)
+            Some(Built::Grid(g, report.stats.memory_bytes))
         }
         #[cfg(feature = "peers")]
-        Subject::Peer(p) => Built::Peer(peers::build(p, tris)),
+        Subject::Peer(p) => peer_guard(p.name(), "build", || peers::build(p, tris)).map(Built::Peer),
     })
+}
+
+/// Runs a peer library's `step`, turning its panic into `None` with a warning: a bug in a peer
+/// must not end the benchmark of the scene's grids.
+#[cfg(feature = "peers")]
+fn peer_guard<T>(name: &str, step: &str, f: impl FnOnce() -> T) -> Option<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+        .map_err(|_| log::warn!("{name} panicked in its {step}; left out of this scene"))
+        .ok()
 }
 
 impl Built {
@@ -173,8 +185,10 @@ impl Built {
                 let opts = TraceOptions::MAILBOX;
                 g.trace_batch(tris, rays, opts, true).0
             }
+            // A peer that panics here misses every ray (its mismatch count shows it).
             #[cfg(feature = "peers")]
-            Built::Peer(p) => p.trace_batch(tris, rays, gridrt_grid::Query::Closest),
+            Built::Peer(p) => peer_guard("a peer", "trace", || p.trace_batch(tris, rays, gridrt_grid::Query::Closest))
+                .unwrap_or_else(|| vec![Hit::MISS; rays.len()]),
         }
     }
 }
@@ -226,7 +240,7 @@ fn bench_scene(
     // second to the next (subject by subject, two builds each, the same scene's ratios moved 2×
     // between runs).
     let subjects = Subject::all(!args.no_peers);
-    let mut builds: Vec<(f64, Option<anyhow::Result<Built>>)> =
+    let mut builds: Vec<(f64, Option<anyhow::Result<Option<Built>>>)> =
         subjects.iter().map(|_| (f64::INFINITY, None)).collect();
     // Each round in another order (a fixed shuffle per round), so that no subject always
     // follows the same one: a build right after one that left rayon's threads awake, or
@@ -235,6 +249,10 @@ fn bench_scene(
     for _ in 0..(args.repeat as usize).max(BUILD_ROUNDS) {
         for k in shuffled(subjects.len(), &mut rng) {
             let (subject, (best, built)) = (subjects[k], &mut builds[k]);
+            // A peer that failed once is not built again.
+            if matches!(built, Some(Ok(None))) {
+                continue;
+            }
             pb.set_message(format!("{} · {} (build)", sc.name, subject.name()));
             // The previous round's structure is dropped first, outside the timing.
             *built = None;
@@ -243,11 +261,13 @@ fn bench_scene(
             *built = Some(b);
         }
     }
-    let built: Vec<(Subject, f64, Built)> = subjects
-        .into_iter()
-        .zip(builds)
-        .map(|(subject, (build_s, b))| Ok((subject, build_s, b.expect("at least one build round")?)))
-        .collect::<anyhow::Result<_>>()?;
+    // A peer that failed is left out of the scene; a grid that failed is an error.
+    let mut built: Vec<(Subject, f64, Built)> = Vec::new();
+    for (subject, (build_s, b)) in subjects.into_iter().zip(builds) {
+        if let Some(b) = b.expect("at least one build round")? {
+            built.push((subject, build_s, b));
+        }
+    }
     // The traces are timed interleaved too, for the same reason as the builds: each round
     // traces every subject's sets once, in a shuffled order, and each keeps its best round (it
     // was each subject's rounds back to back: a burst of load on the machine then moved one
@@ -649,5 +669,15 @@ fn print_rows(rows: &[Row]) {
             seen.push((&r.scene, r.rays));
             println!("  {} {}: {:.0}%", r.scene.trim_end_matches(".glb"), r.rays.name(), r.hit_share * 100.0);
         }
+    }
+}
+
+#[cfg(all(test, feature = "peers"))]
+mod tests {
+    /// A peer's panic becomes `None` (the scene goes on without it); its result otherwise.
+    #[test]
+    fn a_peer_that_panics_is_left_out() {
+        assert_eq!(super::peer_guard("peer", "build", || 7), Some(7));
+        assert_eq!(super::peer_guard("peer", "build", || -> i32 { panic!("index out of bounds") }), None);
     }
 }
