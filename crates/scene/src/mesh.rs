@@ -192,22 +192,27 @@ impl LoadReport {
     }
 }
 
+/// A coordinate as `info` prints it: six decimals at everyday magnitudes, seven significant
+/// digits in scientific notation for a scene nanometres or light years across (whose corners
+/// would otherwise print as 0.000000 or as thirty digits).
+struct Coordinate(f32);
+
+impl std::fmt::Display for Coordinate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v == 0.0 || (1e-3..1e7).contains(&v.abs()) { write!(f, "{v:.6}") } else { write!(f, "{v:.6e}") }
+    }
+}
+
 impl std::fmt::Display for LoadReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "scene:       {}", self.source)?;
         writeln!(f, "triangles:   {}", self.triangles)?;
         writeln!(f, "vertices:    {}", self.vertices)?;
         writeln!(f, "meshes:      {} ({} primitives)", self.meshes, self.primitives)?;
-        writeln!(
-            f,
-            "bounds:      [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
-            self.bounds_min[0],
-            self.bounds_min[1],
-            self.bounds_min[2],
-            self.bounds_max[0],
-            self.bounds_max[1],
-            self.bounds_max[2]
-        )?;
+        let [a, b, c, d, e, g] =
+            [self.bounds_min, self.bounds_max].concat().try_into().unwrap_or([0.0; 6]).map(Coordinate);
+        writeln!(f, "bounds:      [{a}, {b}, {c}] .. [{d}, {e}, {g}]")?;
         writeln!(f, "degenerate:  {} zero-area triangles", self.degenerate_triangles)?;
         write!(f, "skipped:     {} primitives", self.skipped_primitives.len())?;
         for s in &self.skipped_primitives {
@@ -241,5 +246,18 @@ impl std::fmt::Display for LoadReport {
             write!(f, "\nposed at:    {p}")?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Coordinate;
+
+    /// Everyday coordinates print with six decimals; tiny and huge ones keep their digits.
+    #[test]
+    fn coordinates_print_at_every_scale() {
+        let s = |v: f32| Coordinate(v).to_string();
+        assert_eq!((s(0.0), s(1.5), s(-0.0946)), ("0.000000".into(), "1.500000".into(), "-0.094600".into()));
+        assert_eq!((s(1e-12), s(-3e20)), ("1.000000e-12".into(), "-3.000000e20".into()));
     }
 }
