@@ -122,6 +122,13 @@ fn trace_packets(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
             atomicMax(&wg_keys[AXIS_KEYS + KEY_ORG + 2u * a + 1u], order_key(g.o[a]));
             atomicMax(&wg_keys[AXIS_KEYS + KEY_END + 2u * a], ~order_key(end[a]));
             atomicMax(&wg_keys[AXIS_KEYS + KEY_END + 2u * a + 1u], order_key(end[a]));
+            // A ray of a scaled walk (a direction of 2^16 or more) makes the packet incoherent:
+            // its rays are traced alone, where the walk widens its segment and stops by the hits'
+            // rounded t (as the CPU's packets do: SliceWalk::new).
+            if ray.t_scale > 1.0 {
+                atomicMax(&wg_keys[AXIS_KEYS + KEY_DIR + 2u * a], ~order_key(-1.0));
+                atomicMax(&wg_keys[AXIS_KEYS + KEY_DIR + 2u * a + 1u], order_key(1.0));
+            }
         }
     }
     let keys = uniform_keys(AXIS_KEYS);

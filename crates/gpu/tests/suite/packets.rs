@@ -11,7 +11,7 @@ use gridrt_gpu::trace::tile_quantum;
 use gridrt_gpu::{FrameTarget, GpuSession, RenderOptions, View};
 use gridrt_grid::{GridConfig, GridKind, TraceOptions, structure};
 use gridrt_scene::procedural::{SceneKind, generate};
-use gridrt_scene::{Aabb, Camera, Hit};
+use gridrt_scene::{Aabb, Camera, Hit, Ray};
 
 use super::common::{default_scene, gpu, hostile_scenes, read_texture};
 
@@ -69,6 +69,17 @@ fn packet_kernels_equal_single_ray_kernels_bit_for_bit() {
                     assert_eq!(counted_apart, has_kernel, "{name}: which kernel ran");
                     if !mailbox {
                         continue;
+                    }
+                    // Rays of a scaled walk (directions of 2^20) make their packets incoherent:
+                    // traced alone, with the single-ray kernel's hits and counts.
+                    if has_kernel {
+                        let scale = |r: &Ray| Ray::new(r.o(), r.d() * 1048576.0, r.tmin, r.tmax);
+                        let big: Vec<Ray> = rays.iter().map(scale).collect();
+                        let (s, s_stats) = gpu.trace(&gs, &big, TraceOptions::MAILBOX).unwrap();
+                        let (p, p_stats) = gpu.trace_image(&gs, &big, w, TraceOptions::MAILBOX).unwrap();
+                        assert_eq!(differing(&s, &p), 0, "{name}: scaled rays");
+                        let alone = s_stats.iter().zip(&p_stats).all(|(a, b)| a.cells == b.cells);
+                        assert!(alone, "{name}: scaled rays walked as a packet");
                     }
                     // Shadow rays from the light to the hits, as the renderer makes them (a common origin).
                     let shade = shade_params(&b, &opts);
