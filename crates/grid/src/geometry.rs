@@ -47,7 +47,8 @@ pub fn padded_bounds(bounds: &Aabb) -> Aabb {
     // Flat axes (all z equal, a single triangle in a plane) still need a slab of cells. Both
     // sizes are relative to the scene (its extent, and its distance from the origin, which
     // bounds how finely f32 places its corners), so a scene nanometres across gets the cells of
-    // the same scene in metres; only a scene of one point at the origin takes the least box.
+    // the same scene in metres; only a scene of one point at the origin takes the least box
+    // (and a pad of 1e-5 of it, the pad's share of the extent).
     let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
     let floor = (big * 1e-3).max(scale * 1e-5).max(MIN_BOX_EXTENT);
     let pad = Vec3::splat((big * 1e-5).max(scale * 4e-7).max(MIN_BOX_EXTENT * 1e-5));

@@ -41,7 +41,13 @@ impl PreparedRay {
     /// The direction the walks take: `dir / t_scale` (exact, a power of two).
     #[inline(always)]
     pub fn walk_dir(&self) -> Vec3 {
-        self.dir * (1.0 / self.t_scale)
+        self.dir * self.inv_t_scale()
+    }
+
+    /// 1 / `t_scale`, exact, from its exponent bits (2^k → 2^-k with k ≤ 112): no division.
+    #[inline(always)]
+    fn inv_t_scale(&self) -> f32 {
+        f32::from_bits(0x7f00_0000 - self.t_scale.to_bits())
     }
 
     /// The ray's `t` in the walk's units (exact; an overflow to ±inf only widens a bound).
@@ -56,8 +62,7 @@ impl PreparedRay {
     /// smaller than this one.
     #[inline(always)]
     pub fn ray_t(&self, walk_t: f32) -> f32 {
-        // 1 / t_scale from the exponent bits (2^k → 2^-k; k ≤ 112): no division per cell.
-        walk_t * f32::from_bits(0x7f00_0000 - self.t_scale.to_bits())
+        walk_t * self.inv_t_scale()
     }
 }
 

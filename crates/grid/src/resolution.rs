@@ -727,8 +727,8 @@ pub fn sample_curve(
     extended_below(curve, mode, tris.len(), bounds, model, |r| count_refs_curve(tris, bounds, r, mode, parallel).0)
 }
 
-/// `curve` extended below its interval, for a grid of bounding-box insertion `insert`, while
-/// its coarsest sample is the one [`CostModel::best_sample`] takes and coarser grids exist: T(m)
+/// `curve` extended below its interval, for a grid of insertion `insert` when that is
+/// bounding-box insertion, while its coarsest sample is the one [`CostModel::best_sample`] takes and coarser grids exist: T(m)
 /// may keep falling there (long slivers, whose boxes cross many cells at m = ∛N, cost least with
 /// far fewer cells). Each round samples `model.samples / 2` more m geometrically from an eighth
 /// of the coarsest m (at least 1) up to below it, with `count` giving their N_m in one pass; the

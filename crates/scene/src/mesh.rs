@@ -210,8 +210,7 @@ impl std::fmt::Display for LoadReport {
         writeln!(f, "triangles:   {}", self.triangles)?;
         writeln!(f, "vertices:    {}", self.vertices)?;
         writeln!(f, "meshes:      {} ({} primitives)", self.meshes, self.primitives)?;
-        let [a, b, c, d, e, g] =
-            [self.bounds_min, self.bounds_max].concat().try_into().unwrap_or([0.0; 6]).map(Coordinate);
+        let ([a, b, c], [d, e, g]) = (self.bounds_min.map(Coordinate), self.bounds_max.map(Coordinate));
         writeln!(f, "bounds:      [{a}, {b}, {c}] .. [{d}, {e}, {g}]")?;
         writeln!(f, "degenerate:  {} zero-area triangles", self.degenerate_triangles)?;
         write!(f, "skipped:     {} primitives", self.skipped_primitives.len())?;

@@ -179,7 +179,9 @@ impl Built {
             Built::Peer(p) => p.memory_bytes(),
         }
     }
-    fn trace(&self, tris: &[[Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
+    /// `name`: the subject's, for the warning of a peer that panics.
+    #[cfg_attr(not(feature = "peers"), allow(unused_variables))]
+    fn trace(&self, name: &str, tris: &[[Vec3; 3]], rays: &[Ray]) -> Vec<Hit> {
         match self {
             Built::Grid(g, _) => {
                 let opts = TraceOptions::MAILBOX;
@@ -187,7 +189,7 @@ impl Built {
             }
             // A peer that panics here misses every ray (its mismatch count shows it).
             #[cfg(feature = "peers")]
-            Built::Peer(p) => peer_guard("a peer", "trace", || p.trace_batch(tris, rays, gridrt_grid::Query::Closest))
+            Built::Peer(p) => peer_guard(name, "trace", || p.trace_batch(tris, rays, gridrt_grid::Query::Closest))
                 .unwrap_or_else(|| vec![Hit::MISS; rays.len()]),
         }
     }
@@ -285,9 +287,10 @@ fn bench_scene(
     while another_round(round, args.repeat, traces_start) {
         for k in shuffled(built.len(), &mut rng) {
             let (subject, _, b) = &built[k];
-            pb.set_message(format!("{} · {} (trace, round {})", sc.name, subject.name(), round + 1));
+            let name = subject.name();
+            pb.set_message(format!("{} · {name} (trace, round {})", sc.name, round + 1));
             for (i, batch) in sets.iter().enumerate() {
-                let (s, h) = best_of(1, || b.trace(&sc.tris, &batch.rays));
+                let (s, h) = best_of(1, || b.trace(&name, &sc.tris, &batch.rays));
                 single_best[k][i] = single_best[k][i].min(s);
                 if round == 0 {
                     single_hits[k].push(h);
