@@ -99,6 +99,11 @@ pub struct AppArgs {
     /// setting; faster where the adapter is a software one).
     #[arg(long)]
     pub cpu_trace: bool,
+    /// Cap the device's storage-buffer binding size at this many bytes, e.g. 128M (WebGPU's
+    /// default and lavapipe's limit), to see how the app handles a device that cannot hold a
+    /// scene: natively its frames are then traced on the CPU.
+    #[arg(long, value_parser = parse_bytes)]
+    pub max_gpu_buffer: Option<u64>,
 }
 
 /// The app's extra windows.

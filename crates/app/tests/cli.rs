@@ -729,6 +729,32 @@ fn app_screenshots_under_xvfb() {
         );
     }
 
+    // A scene the device cannot hold (its storage bindings capped below the triangles' size by
+    // `--max-gpu-buffer`): the app keeps it on the CPU, which traces the frames, and says why;
+    // the image is the one `--cpu-trace` gives.
+    let capped = {
+        let png = out_dir.join("app-capped.png");
+        let _ = std::fs::remove_file(&png);
+        let out = gridrt_cmd()
+            .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--grid", "macrocell", "--view", "shaded"])
+            .args(["--camera", "0.25,0.18,0.35,0,0,0,50", "--render-scale", "0.5", "--packets", "on"])
+            .args(["--max-gpu-buffer", "4K"])
+            .env("DISPLAY", &x.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("running the app");
+        let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success(), "app --max-gpu-buffer 4K failed:\n{log}");
+        assert!(
+            log.contains("on the CPU,") && log.contains("the device cannot hold the triangles"),
+            "the capped device's frames should be traced on the CPU, saying why:\n{log}"
+        );
+        centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
+    };
+    let cpu = centre_pixels(&shot_on("macrocell", "shaded", "on", true));
+    let differ = capped.iter().zip(&cpu).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "{differ} of {} centre pixels differ from --cpu-trace's", cpu.len());
+
     // `--camera auto|framed|interior` (the Camera menu's views): the framed view fills the image
     // with the model, so its centre is lit and differs from the bounds-framing view's.
     let view_shot = |camera: &str| -> Vec<[u8; 3]> {

@@ -115,16 +115,25 @@ impl GridrtApp {
         let (Some(gpu), Some(scene), Some(b), Some(key)) = (&self.gpu, &self.scene, &self.built, self.last_key) else {
             return;
         };
-        let (Some(gs), Some(s)) = (&scene.gpu, &b.gpu) else { return };
         let opts = self.render_options(key.camera, key.size);
-        let result = gpu
-            .renderer
-            .render(&gpu.ctx, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds }, &opts)
-            .map_err(|e| e.to_string())
-            .and_then(|f| {
-                image::save_buffer(&path, &f.rgba, f.width, f.height, image::ExtendedColorType::Rgba8)
-                    .map_err(|e| e.to_string())
-            });
+        // The posed triangles when the scene plays; on the CPU when the device cannot hold them.
+        let rgba = match (b.posed_gpu.as_ref().or(scene.gpu.as_ref()), &b.gpu) {
+            (Some(gs), Some(s)) => gpu
+                .renderer
+                .render(&gpu.ctx, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds }, &opts)
+                .map(|f| f.rgba)
+                .map_err(|e| e.to_string()),
+            _ => {
+                let tris = b.built.pose.as_ref().map_or_else(|| scene.loaded.tris.clone(), |p| p.tris.clone());
+                let req =
+                    super::viewport::CpuRequest { opts, grid: b.built.grid.clone(), tris, bounds: scene.loaded.bounds };
+                Ok(super::viewport::trace_on_cpu(req).rgba)
+            }
+        };
+        let result = rgba.and_then(|rgba| {
+            image::save_buffer(&path, &rgba, opts.width, opts.height, image::ExtendedColorType::Rgba8)
+                .map_err(|e| e.to_string())
+        });
         if let Err(e) = result {
             self.errors.report(ErrorKind::Other, format!("saving {}: {e}", path.display()));
         }

@@ -2,9 +2,11 @@
 //! structure the settings ask for is built off the UI thread and uploaded; a failure keeps the
 //! previous scene or structure on screen and is reported. An animated scene is posed at the
 //! timeline's time and rebuilt with every pose; a finished frame waits until the frame on
-//! screen is complete, so every pose built is shown.
+//! screen is complete, so every pose built is shown. Natively, a scene or structure larger than
+//! the device's buffer limits stays on the CPU: its frames are traced there ([`GridrtApp::off_gpu`]).
 
 use eframe::egui;
+use gridrt_gpu::GpuError;
 use gridrt_gpu::upload::{GpuScene, GpuStructure};
 use gridrt_grid::GridConfig;
 use gridrt_grid::cell_plane::CellPlanes;
@@ -15,12 +17,16 @@ use super::jobs::{self, Job, LoadedScene, SceneSource};
 use super::orbit::Orbit;
 use super::timeline::Timeline;
 use crate::cli::CameraArg;
+use crate::format::human_bytes;
 use crate::gui::built::{Built, BuiltOn};
 
 #[derive(Debug)]
 pub(super) struct SceneState {
     pub(super) loaded: LoadedScene,
     pub(super) gpu: Option<GpuScene>,
+    /// Natively, why the device does not hold the scene (a buffer beyond its limits): its
+    /// structures stay on the CPU, which traces its frames.
+    pub(super) off_gpu: Option<String>,
     pub(super) generation: u64,
 }
 
@@ -32,6 +38,8 @@ pub(super) struct BuiltState {
     pub(super) posed_gpu: Option<GpuScene>,
     /// Posed triangles and structure copied to the GPU, milliseconds.
     pub(super) upload_ms: f64,
+    /// Natively, why the device does not hold this structure or its pose: the CPU traces it.
+    pub(super) off_gpu: Option<String>,
     /// Changes with every new structure (part of the render key).
     pub(super) id: u64,
 }
@@ -144,15 +152,18 @@ impl GridrtApp {
     }
 
     /// Makes `loaded` the current scene; when its GPU upload fails the previous scene stays and
-    /// the error is returned.
+    /// the error is returned (natively, a scene beyond the device's buffer limits is kept on the
+    /// CPU instead).
     pub(super) fn set_scene(&mut self, loaded: LoadedScene) -> Result<(), String> {
-        let gpu_scene = match &self.gpu {
-            Some(g) => Some(
-                GpuScene::new(&g.ctx, &loaded.tris)
-                    .and_then(|s| g.ctx.check_device().map(|()| s))
-                    .map_err(|e| format!("{}: {e} (the previous scene stays)", loaded.name))?,
-            ),
-            None => None,
+        let (gpu_scene, off_gpu) = match &self.gpu {
+            Some(g) => {
+                let uploaded = GpuScene::new(&g.ctx, &loaded.tris).and_then(|s| g.ctx.check_device().map(|()| s));
+                match held_on_cpu(uploaded) {
+                    Ok(kept) => kept,
+                    Err(e) => return Err(format!("{}: {e} (the previous scene stays)", loaded.name)),
+                }
+            }
+            None => (None, None),
         };
         self.scene_generation += 1;
         let aspect = self.last_key.map_or(1.0, |k| k.size[0] as f32 / k.size[1].max(1) as f32);
@@ -164,7 +175,7 @@ impl GridrtApp {
         self.initial_camera = self.initial_camera.filter(|c| matches!(c, CameraArg::Framed | CameraArg::Interior));
         self.timeline = self.start_timeline(&loaded);
         self.ready = None;
-        self.scene = Some(SceneState { loaded, gpu: gpu_scene, generation: self.scene_generation });
+        self.scene = Some(SceneState { loaded, gpu: gpu_scene, off_gpu, generation: self.scene_generation });
         self.measurement = Default::default();
         self.errors.clear_build();
         Ok(())
@@ -205,12 +216,27 @@ impl GridrtApp {
 
     /// The structure the settings ask for, as it is built ([`as_built`]).
     fn wanted_grid(&self) -> GridConfig {
-        as_built(self.settings.grid, self.settings.cpu_traces())
+        as_built(self.settings.grid, self.cpu_traces())
     }
 
-    /// The device to build on when the settings ask for GPU builds.
+    /// Natively, why the frames are traced on the CPU whatever the settings: the device cannot
+    /// hold the scene, or the structure on screen (one of this scene's).
+    pub(super) fn off_gpu(&self) -> Option<&str> {
+        let scene = self.scene.as_ref()?;
+        let built = self.built.as_ref().filter(|b| b.built.scene_generation == scene.generation);
+        scene.off_gpu.as_deref().or_else(|| built.and_then(|b| b.off_gpu.as_deref()))
+    }
+
+    /// Whether the CPU traces the frames: the settings ask for it, or the device cannot hold
+    /// what is on screen ([`GridrtApp::off_gpu`]).
+    pub(super) fn cpu_traces(&self) -> bool {
+        self.settings.cpu_traces() || self.off_gpu().is_some()
+    }
+
+    /// The device to build on when the settings ask for GPU builds (not for a scene it cannot
+    /// hold).
     fn gpu_build(&self) -> Option<crate::gui::built::GpuBuild> {
-        if !self.settings.gpu_build {
+        if !self.settings.gpu_build || self.scene.as_ref().is_some_and(|s| s.off_gpu.is_some()) {
             return None;
         }
         self.gpu.as_ref().map(|g| crate::gui::built::GpuBuild { ctx: g.ctx.clone(), builder: g.builder.clone() })
@@ -223,24 +249,34 @@ impl GridrtApp {
             let posed_gpu = built.pose.is_some().then_some(on_gpu.scene);
             self.built_counter += 1;
             let upload_ms = on_gpu.upload_ms;
-            self.built =
-                Some(BuiltState { built, gpu: Some(on_gpu.structure), posed_gpu, upload_ms, id: self.built_counter });
+            self.built = Some(BuiltState {
+                built,
+                gpu: Some(on_gpu.structure),
+                posed_gpu,
+                upload_ms,
+                off_gpu: None,
+                id: self.built_counter,
+            });
             return;
         }
         let started = web_time::Instant::now();
+        let scene_on_gpu = self.scene.as_ref().is_some_and(|s| s.off_gpu.is_none());
         let uploaded = match &self.gpu {
-            Some(g) => {
+            Some(g) if scene_on_gpu => {
                 let posed = built.pose.as_ref().map(|p| GpuScene::new(&g.ctx, &p.tris)).transpose();
                 let structure = GpuStructure::new(&g.ctx, &built.grid);
-                match (posed, structure) {
-                    (Ok(p), Ok(s)) => g.ctx.check_device().map(|()| (Some(s), p)),
+                let both = match (posed, structure) {
+                    (Ok(p), Ok(s)) => g.ctx.check_device().map(|()| (s, p)),
                     (Err(e), _) | (_, Err(e)) => Err(e),
-                }
+                };
+                held_on_cpu(both)
             }
-            None => Ok((None, None)),
+            // The device holds nothing of a scene it could not hold.
+            _ => Ok((None, None)),
         };
-        let (gpu, posed_gpu) = match uploaded {
-            Ok(u) => u,
+        let ((gpu, posed_gpu), off_gpu) = match uploaded {
+            Ok((Some((s, p)), off)) => ((Some(s), p), off),
+            Ok((None, off)) => ((None, None), off),
             Err(e) => {
                 // The previous structure stays on screen; this configuration is not retried.
                 self.errors.report(
@@ -252,11 +288,30 @@ impl GridrtApp {
         };
         self.built_counter += 1;
         let upload_ms = started.elapsed().as_secs_f64() * 1e3;
-        self.built = Some(BuiltState { built, gpu, posed_gpu, upload_ms, id: self.built_counter });
+        self.built = Some(BuiltState { built, gpu, posed_gpu, upload_ms, off_gpu, id: self.built_counter });
         // `--camera framed|interior`: aimed with the first structure.
         if let Some(view) = self.initial_camera.take() {
             self.view_camera(view);
         }
+    }
+}
+
+/// What an upload gave: the value, or natively for a buffer beyond the device's limits nothing
+/// and why (the CPU then holds and traces it; the browser has no CPU tracing, so there it is an
+/// error like any other).
+fn held_on_cpu<T>(uploaded: Result<T, GpuError>) -> Result<(Option<T>, Option<String>), GpuError> {
+    match uploaded {
+        Ok(v) => Ok((Some(v), None)),
+        Err(GpuError::BufferTooLarge { buffer, size, limit, which }) if cfg!(not(target_arch = "wasm32")) => {
+            let (size, limit) = (human_bytes(size), human_bytes(limit));
+            Ok((
+                None,
+                Some(format!(
+                    "traced on the CPU: the device cannot hold the {buffer} ({size}; its {which} is {limit})"
+                )),
+            ))
+        }
+        Err(e) => Err(e),
     }
 }
 

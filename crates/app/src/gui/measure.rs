@@ -64,7 +64,12 @@ impl GridrtApp {
     pub(super) fn time_frame(&mut self, b: &Built) {
         let res = self.measurement.pending.remove(0);
         let (Some(gpu), Some(scene), Some(key)) = (&self.gpu, &self.scene, self.last_key) else { return };
-        let Some(gs) = &scene.gpu else { return };
+        let Some(gs) = &scene.gpu else {
+            let why = scene.off_gpu.as_deref().unwrap_or("the scene is not on the device");
+            self.errors.report(ErrorKind::Other, format!("frame-time measurement needs the GPU: {why}"));
+            self.measurement.pending.clear();
+            return;
+        };
         let s = match GpuStructure::new(&gpu.ctx, &b.grid) {
             Ok(s) => s,
             Err(e) => {

@@ -307,10 +307,13 @@ impl GridrtApp {
                 egui::Label::new(format!("{}… {:.1} s", job.what, job.elapsed_s())),
             );
         }
+        let cpu_trace = self.cpu_traces();
         let Some(gpu) = &self.gpu else { return };
         let (Some(scene), Some(b)) = (&self.scene, &self.built) else { return };
-        let (Some(gs), Some(s)) = (b.posed_gpu.as_ref().or(scene.gpu.as_ref()), &b.gpu) else { return };
-        if b.built.scene_generation != scene.generation {
+        // The triangles and structure on the device (none when it cannot hold them: the CPU
+        // traces them then).
+        let on_device = b.posed_gpu.as_ref().or(scene.gpu.as_ref()).zip(b.gpu.as_ref());
+        if b.built.scene_generation != scene.generation || (on_device.is_none() && !cpu_trace) {
             return;
         }
         let key = RenderKey {
@@ -322,7 +325,7 @@ impl GridrtApp {
             heat_max: self.settings.heat_max,
             size,
             structure: b.id,
-            cpu_trace: self.settings.cpu_traces(),
+            cpu_trace,
         };
         // Smoke mode renders its N frames back to back.
         let smoke_wants_frame =
@@ -341,11 +344,8 @@ impl GridrtApp {
             self.viewport.start(&opts);
             self.last_key = Some(key);
         }
-        match self
-            .viewport
-            .step(gpu, &FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds })
-            .and_then(|done| gpu.ctx.check_device().map(|()| done))
-        {
+        let source = on_device.map(|(gs, s)| FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds });
+        match self.viewport.step(gpu, source.as_ref()).and_then(|done| gpu.ctx.check_device().map(|()| done)) {
             // A finished frame ends an earlier render error.
             Ok(true) => {
                 self.errors.clear(|k| *k == ErrorKind::Render);
@@ -398,7 +398,8 @@ impl eframe::App for GridrtApp {
         egui::Panel::left("controls").resizable(true).default_size(290.0).size_range(200.0..=480.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
                 let built = self.built.as_ref().map(|b| &b.built);
-                panels::controls(ui, &mut self.settings, built);
+                let off_gpu = self.off_gpu().map(str::to_owned);
+                panels::controls(ui, &mut self.settings, built, off_gpu.as_deref());
             });
         });
         egui::Panel::right("stats").resizable(true).default_size(270.0).size_range(180.0..=480.0).show(ui, |ui| {
@@ -419,6 +420,7 @@ impl eframe::App for GridrtApp {
                 self.built.as_ref().map(|b| &b.built),
                 building,
                 self.viewport.last.as_ref(),
+                self.off_gpu(),
             );
             let mut dismissable = false;
             for (kind, e) in self.errors.iter() {
@@ -483,15 +485,19 @@ impl eframe::App for GridrtApp {
 }
 
 /// wgpu setup shared by the native and web mains: the device asks for the features and limits
-/// gridrt's kernels need (within what the adapter offers), plus a texture size for large windows.
-pub fn wgpu_options() -> eframe::egui_wgpu::WgpuConfiguration {
+/// gridrt's kernels need (within what the adapter offers), plus a texture size for large windows;
+/// `max_buffer` caps its storage-buffer binding size (`--max-gpu-buffer`).
+pub fn wgpu_options(max_buffer: Option<u64>) -> eframe::egui_wgpu::WgpuConfiguration {
     use eframe::egui_wgpu::{WgpuConfiguration, WgpuSetup, WgpuSetupCreateNew};
     let mut setup = WgpuSetupCreateNew::without_display_handle();
-    setup.device_descriptor = Arc::new(|adapter| {
+    setup.device_descriptor = Arc::new(move |adapter| {
         let offered = adapter.limits();
         let mut limits = gridrt_gpu::context::required_limits(&offered);
         limits.max_texture_dimension_2d =
             offered.max_texture_dimension_2d.min(8192).max(limits.max_texture_dimension_2d);
+        if let Some(cap) = max_buffer {
+            limits.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size.min(cap);
+        }
         wgpu::DeviceDescriptor {
             label: Some("gridrt app device"),
             required_features: gridrt_gpu::context::required_features(adapter.features()),
@@ -522,7 +528,7 @@ pub fn run_native(args: AppArgs) -> anyhow::Result<()> {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size([args.window_size.0 as f32, args.window_size.1 as f32])
             .with_title("gridrt"),
-        wgpu_options: wgpu_options(),
+        wgpu_options: wgpu_options(args.max_gpu_buffer),
         persist_window: !smoke,
         ..Default::default()
     };
@@ -549,7 +555,7 @@ pub fn run_native(args: AppArgs) -> anyhow::Result<()> {
 pub fn start_web() {
     use eframe::wasm_bindgen::JsCast as _;
     eframe::WebLogger::init(log::LevelFilter::Info).ok();
-    let options = eframe::WebOptions { wgpu_options: wgpu_options(), ..Default::default() };
+    let options = eframe::WebOptions { wgpu_options: wgpu_options(None), ..Default::default() };
     wasm_bindgen_futures::spawn_local(async move {
         let document = eframe::web_sys::window().and_then(|w| w.document()).expect("a browser document");
         let canvas = document

@@ -45,7 +45,9 @@ fn res_choice(r: Option<Resolution>) -> ResChoice {
 }
 
 /// Structure, traversal and view controls. `built` gives the live numbers next to them.
-pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
+/// `off_gpu`: natively, why the CPU traces whatever the settings say (the device cannot hold
+/// the scene or the structure).
+pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>, off_gpu: Option<&str>) {
     ui.heading("Structure");
     let g = &mut s.grid;
     egui::ComboBox::from_label("grid").selected_text(g.kind.name()).show_ui(ui, |ui| {
@@ -131,7 +133,7 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
         });
     }
     let buildable = gridrt_gpu::build::GridBuilder::supports(g);
-    ui.checkbox(&mut s.gpu_build, "build on the GPU").on_hover_text(
+    ui.add_enabled(off_gpu.is_none(), egui::Checkbox::new(&mut s.gpu_build, "build on the GPU")).on_hover_text(
         "Flat and macrocell grids (box or exact insertion) are built by WGSL kernels on this \
          device (bit-identical to the CPU build); other structures are built on the CPU.",
     );
@@ -234,10 +236,19 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>) {
     ui.checkbox(&mut s.packets, "coherent packets (8×8)")
         .on_hover_text("Primary and shadow rays traced in 8×8 packets that walk the grid slice by slice (on the GPU: flat and macrocell grids, the others single rays; on the CPU: every grid, a hierarchy's child grids layer by layer)");
     #[cfg(not(target_arch = "wasm32"))]
-    ui.checkbox(&mut s.cpu_trace, "trace on the CPU").on_hover_text(
-        "Frames traced by the render kernels' CPU ports on every core (`--cpu-trace`): faster than \
-         a software adapter; the same image. Packets are faster than single rays there.",
-    );
+    {
+        let mut on = s.cpu_trace || off_gpu.is_some();
+        ui.add_enabled(off_gpu.is_none(), egui::Checkbox::new(&mut on, "trace on the CPU")).on_hover_text(
+            "Frames traced by the render kernels' CPU ports on every core (`--cpu-trace`): faster than \
+             a software adapter; the same image. Packets are faster than single rays there.",
+        );
+        if off_gpu.is_none() {
+            s.cpu_trace = on;
+        }
+        if let Some(why) = off_gpu {
+            ui.small(why);
+        }
+    }
 
     ui.separator();
     ui.heading("View");
@@ -284,6 +295,7 @@ pub fn stats(
     built: Option<&Built>,
     building: Option<(String, f64)>,
     frame: Option<&FrameStats>,
+    off_gpu: Option<&str>,
 ) {
     ui.add(egui::Label::new(egui::RichText::new(adapter).small()).wrap());
     egui::Grid::new("stats grid").num_columns(2).striped(true).show(ui, |ui| {
@@ -326,6 +338,9 @@ pub fn stats(
         if let Some(f) = frame {
             row("frame", format!("{}×{}", f.width, f.height));
             row("frame ms", format!("{:.1} ({})", f.ms, if f.on_cpu { "CPU" } else { "GPU" }));
+            if let Some(why) = off_gpu {
+                row("GPU", why.to_string());
+            }
             row("Mrays/s", format!("{:.2} ({} rays)", f.mrays_per_s(), f.rays()));
             row("cells / ray", format!("{:.2}", f.mean_cells()));
             row("tests / ray", format!("{:.2}", f.mean_tests()));

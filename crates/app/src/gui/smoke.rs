@@ -43,6 +43,7 @@ impl GridrtApp {
         let frames_done = self.viewport.frames_done;
         let animation = self.animation_stats();
         let on_gpu = self.built.as_ref().is_some_and(|b| b.built.built_on == BuiltOn::Gpu);
+        let off_gpu = self.off_gpu().map_or(String::new(), |why| format!("; {why}"));
         let Some(s) = &mut self.smoke else { return };
         ctx.request_repaint();
         if s.started.elapsed().as_secs_f64() > SMOKE_TIMEOUT_S {
@@ -64,18 +65,20 @@ impl GridrtApp {
             .map(|()| {
                 let f = self.viewport.last;
                 format!(
-                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}{}{}",
+                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}{}{}{}",
                     w,
                     h,
                     s.path.display(),
                     f.map_or(String::new(), |f| format!(
-                        " (last frame {}x{}: {:.1} ms, {:.2} cells/ray, {:.2} tests/ray)",
+                        " (last frame {}x{}: {:.1} ms on the {}, {:.2} cells/ray, {:.2} tests/ray)",
                         f.width,
                         f.height,
                         f.ms,
+                        if f.on_cpu { "CPU" } else { "GPU" },
                         f.mean_cells(),
                         f.mean_tests()
                     )),
+                    off_gpu,
                     if on_gpu { "; structure built on the GPU" } else { "" },
                     match animation {
                         Some(a) => format!(

@@ -152,9 +152,9 @@ struct CpuFrames {
 /// A frame traced on the CPU: the image, its counts and its wall-clock time.
 #[cfg(not(target_arch = "wasm32"))]
 #[derive(Debug)]
-struct CpuFrame {
+pub struct CpuFrame {
     opts: RenderOptions,
-    rgba: Vec<u8>,
+    pub rgba: Vec<u8>,
     totals: FrameTotals,
     ms: f64,
 }
@@ -253,10 +253,13 @@ impl Viewport {
         self.shown = Some((t.width, t.height));
     }
 
-    /// Advances rendering, on the GPU and (natively) on the CPU, whichever was asked for last:
-    /// true when a frame completed.
-    pub fn step(&mut self, gpu: &Gpu, src: &FrameSource) -> Result<bool, GpuError> {
-        let on_gpu = self.step_gpu(gpu, src)?;
+    /// Advances rendering, on the GPU (when `src` is on it) and (natively) on the CPU,
+    /// whichever was asked for last: true when a frame completed.
+    pub fn step(&mut self, gpu: &Gpu, src: Option<&FrameSource>) -> Result<bool, GpuError> {
+        let on_gpu = match src {
+            Some(src) => self.step_gpu(gpu, src)?,
+            None => false,
+        };
         #[cfg(not(target_arch = "wasm32"))]
         if self.step_cpu(gpu)? {
             return Ok(true);
@@ -424,12 +427,12 @@ impl Viewport {
                 // Stop after the tile on the GPU: do not submit the rest.
                 f.n = f.next;
             }
-            self.step(gpu, src)?;
+            self.step(gpu, Some(src))?;
         }
         self.start(opts);
         let started = Instant::now();
         loop {
-            if self.step(gpu, src)? {
+            if self.step(gpu, Some(src))? {
                 return Ok(started.elapsed().as_secs_f64() * 1e3);
             }
             let _ = gpu.ctx.device.poll(wgpu::PollType::wait_indefinitely());
@@ -483,7 +486,7 @@ impl Viewport {
 /// Traces and shades one frame on the CPU: coherent packets when the settings ask for them
 /// (single rays for the heatmaps, which need per-ray counts).
 #[cfg(not(target_arch = "wasm32"))]
-fn trace_on_cpu(req: CpuRequest) -> CpuFrame {
+pub fn trace_on_cpu(req: CpuRequest) -> CpuFrame {
     let started = Instant::now();
     let o = req.opts;
     let primary = gridrt_gpu::cpu::camera_rays(&gridrt_gpu::cpu::gpu_camera(&o.camera, o.width, o.height));

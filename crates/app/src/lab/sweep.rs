@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use gridrt_gpu::{GpuContext, GpuSession};
+use gridrt_gpu::{GpuContext, GpuError, GpuSession};
 use gridrt_grid::trace::TraceOptions;
 use gridrt_grid::{GridConfig, GridKind, Resolution, structure};
 use gridrt_scene::Ray;
@@ -42,12 +42,28 @@ pub fn best_of<T>(repeat: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     (best, out.expect("at least one run"))
 }
 
-/// The scene on the device when there is one (each experiment uploads once per scene).
+/// The scene on the device when there is one (each experiment uploads once per scene); `None`
+/// with a warning when the device cannot hold it ([`fits_on_gpu`]).
 pub fn session<'a>(ctx: Option<&'a GpuContext>, sc: &LabScene) -> anyhow::Result<Option<GpuSession<'a>>> {
     Ok(match ctx {
-        Some(c) => Some(GpuSession::new(c, &sc.tris, sc.bounds)?),
+        Some(c) => fits_on_gpu(GpuSession::new(c, &sc.tris, sc.bounds), &sc.name)?,
         None => None,
     })
+}
+
+/// `r`'s value, or `None` with a warning when the device's buffers cannot hold what `what`
+/// needed (a scene or grid beyond its `max_storage_buffer_binding_size`: lavapipe's is 128 MiB,
+/// about 2.8M triangles): a measurement leaves the GPU out of it, as it would without a
+/// device, rather than end. Every other GPU error stays an error.
+pub fn fits_on_gpu<T>(r: Result<T, GpuError>, what: &str) -> Result<Option<T>, GpuError> {
+    match r {
+        Ok(v) => Ok(Some(v)),
+        Err(e @ GpuError::BufferTooLarge { .. }) => {
+            log::warn!("{what}: the GPU is left out: {e}");
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// "CPU n threads[, GPU adapter]": what a measurement ran on.
@@ -82,9 +98,12 @@ pub fn measure_config(
     let opts = TraceOptions::MAILBOX;
     let (_, stats) = grid.trace_batch(tris, rays, opts, true);
     let (cpu_s, _) = best_of(repeat, || grid.trace_batch(tris, rays, opts, true));
-    let gpu_s = match gpu {
-        Some(g) => {
-            let gs = g.upload(&grid)?;
+    let uploaded = match gpu {
+        Some(g) => fits_on_gpu(g.upload(&grid), &format!("the {} grid at {res:?}", cfg.kind))?.map(|gs| (g, gs)),
+        None => None,
+    };
+    let gpu_s = match uploaded {
+        Some((g, gs)) => {
             // One untimed warm-up (pipeline creation, first upload).
             g.trace(&gs, &rays[..rays.len().min(64)], opts)?;
             let (secs, r) = best_of(repeat, || g.trace(&gs, rays, opts));
@@ -107,4 +126,19 @@ pub fn measure_config(
         mean_cells_per_ray: stats.cells as f64 / n,
         mean_tests_per_ray: stats.tests as f64 / n,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A buffer beyond the device's limits leaves the GPU out (`None`); any other GPU error
+    /// stays an error, and a value passes through.
+    #[test]
+    fn only_a_buffer_too_large_leaves_the_gpu_out() {
+        let too_large = GpuError::BufferTooLarge { buffer: "triangles", size: 2, limit: 1, which: "max_buffer_size" };
+        assert!(matches!(fits_on_gpu::<u8>(Err(too_large), "scene"), Ok(None)));
+        assert!(matches!(fits_on_gpu(Ok(7u8), "scene"), Ok(Some(7))));
+        assert!(fits_on_gpu::<u8>(Err(GpuError::Device("lost".into())), "scene").is_err());
+    }
 }

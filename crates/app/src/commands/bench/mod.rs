@@ -25,7 +25,7 @@ use serde::Serialize;
 use crate::cli::BenchArgs;
 use crate::lab::report::{Chart, Series, print_table, progress, save_chart, write_rows};
 use crate::lab::scenes::{LabScene, default_scenes, every_scene, procedural_scenes};
-use crate::lab::sweep::{best_of, machine, session};
+use crate::lab::sweep::{best_of, fits_on_gpu, machine, session};
 use crate::lab::views::{RayBatch, RaySet, hit_share, probe_grid, ray_sets};
 
 /// One structure on one scene and one ray set (its build and memory figures stand on each of its
@@ -318,14 +318,20 @@ fn bench_scene(
             speeds: Vec::new(),
             hits: std::mem::take(&mut single_hits[k]),
         };
+        // A grid the device cannot hold has no GPU figures (a warning says why).
+        let uploaded = match (&built, gpu.as_ref()) {
+            (Built::Grid(g, _), Some(gpu)) => {
+                fits_on_gpu(gpu.upload(g), &format!("{}, {}", sc.name, subject.name()))?.map(|gs| (gpu, gs))
+            }
+            _ => None,
+        };
         for (i, batch) in sets.iter().enumerate() {
             let mut gpu_mrays = None;
-            if let (Built::Grid(g, _), Some(gpu)) = (&built, gpu.as_ref()) {
-                let gs = gpu.upload(g)?;
+            if let Some((gpu, gs)) = &uploaded {
                 let rays = &batch.rays;
                 // Untimed warm-up: pipeline creation and first upload.
-                gpu.trace(&gs, &rays[..rays.len().min(64)], TraceOptions::MAILBOX)?;
-                let (s, r) = best_of(args.repeat as usize, || gpu.trace(&gs, rays, TraceOptions::MAILBOX));
+                gpu.trace(gs, &rays[..rays.len().min(64)], TraceOptions::MAILBOX)?;
+                let (s, r) = best_of(args.repeat as usize, || gpu.trace(gs, rays, TraceOptions::MAILBOX));
                 r?;
                 gpu_mrays = Some(rays.len() as f64 / s / 1e6);
             }
