@@ -94,8 +94,8 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let mut gpu = match &ctx {
         Some(ctx) => {
             let (grid, _) = build_grid(&player.tris, &cfg)?;
-            let gpu = GpuSession::new(ctx, &player.tris, bounds)?;
-            gpu.render(&gpu.upload(&grid)?, &RenderOptions { width: 64, height: 48, ..opts })?;
+            let gpu = super::on_device(GpuSession::new(ctx, &player.tris, bounds))?;
+            gpu.render(&super::on_device(gpu.upload(&grid))?, &RenderOptions { width: 64, height: 48, ..opts })?;
             Some(gpu)
         }
         None => None,
@@ -120,8 +120,8 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         let (primary_hits, shadowed, traced, passes, rgba) = match &mut gpu {
             Some(gpu) => {
-                gpu.set_triangles(tris)?;
-                let frame = gpu.render(&gpu.upload(&grid)?, &opts)?;
+                super::on_device(gpu.set_triangles(tris))?;
+                let frame = gpu.render(&super::on_device(gpu.upload(&grid))?, &opts)?;
                 let traced = Instant::now();
                 let hits = frame.hits.iter().filter(|h| h.is_hit()).count() as u64;
                 let passes = (frame.times.primary_ms, frame.times.shadow_ms.unwrap_or(0.0));

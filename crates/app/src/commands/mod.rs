@@ -68,8 +68,36 @@ pub fn build_grid(tris: &[[Vec3; 3]], cfg: &GridConfig) -> anyhow::Result<(AnyGr
 pub use crate::format::human_bytes;
 
 /// The GPU device, with its adapter reported on stderr.
+/// `r`, an upload of a scene or grid to the device, with a hint where the device cannot hold it:
+/// the CPU backend has no such limit.
+pub fn on_device<T>(r: Result<T, gridrt_gpu::GpuError>) -> anyhow::Result<T> {
+    r.map_err(|e| match e {
+        gridrt_gpu::GpuError::BufferTooLarge { .. } => {
+            anyhow::Error::new(e).context("the device cannot hold this scene or grid (--backend cpu has no such limit)")
+        }
+        e => e.into(),
+    })
+}
+
 pub fn gpu_context() -> anyhow::Result<gridrt_gpu::GpuContext> {
     let ctx = gridrt_gpu::GpuContext::new_headless_blocking()?;
     eprintln!("GPU adapter: {}", ctx.adapter_name());
     Ok(ctx)
+}
+
+#[cfg(test)]
+mod tests {
+    use gridrt_gpu::GpuError;
+
+    /// A scene or grid the device cannot hold points to the CPU backend; other errors pass as
+    /// they are.
+    #[test]
+    fn a_buffer_too_large_points_to_the_cpu_backend() {
+        let e = GpuError::BufferTooLarge { buffer: "triangles", size: 2, limit: 1, which: "max_buffer_size" };
+        let text = format!("{:#}", super::on_device::<()>(Err(e)).unwrap_err());
+        assert!(text.contains("--backend cpu") && text.contains("triangles needs 2 bytes"), "{text}");
+        let text = format!("{:#}", super::on_device::<()>(Err(GpuError::Device("lost".into()))).unwrap_err());
+        assert!(!text.contains("--backend cpu"), "{text}");
+        assert_eq!(super::on_device(Ok(3)).unwrap(), 3);
+    }
 }

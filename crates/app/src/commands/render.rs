@@ -50,8 +50,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 gridrt_gpu::Kernel::PACKET_EDGE,
             );
             let ctx = super::gpu_context()?;
-            let gpu = GpuSession::new(&ctx, &tris, bounds)?;
-            let gs = gpu.upload(&grid)?;
+            let gpu = super::on_device(GpuSession::new(&ctx, &tris, bounds))?;
+            let gs = super::on_device(gpu.upload(&grid))?;
             // Warm-up on a small frame: pipeline compilation stays out of the timing.
             gpu.render(&gs, &RenderOptions { width: 64, height: 48, ..opts })?;
             let frame = gpu.render(&gs, &opts)?;

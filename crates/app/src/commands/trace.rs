@@ -37,8 +37,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         Backend::Gpu => {
             let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
             let ctx = super::gpu_context()?;
-            let gpu = gridrt_gpu::GpuSession::new(&ctx, &tris, mesh.bounds())?;
-            let gs = gpu.upload(&grid)?;
+            let gpu = super::on_device(gridrt_gpu::GpuSession::new(&ctx, &tris, mesh.bounds()))?;
+            let gs = super::on_device(gpu.upload(&grid))?;
             // Warm-up (pipeline creation) outside the timing.
             gpu.trace(&gs, &rays[..rays.len().min(64)], opts)?;
             let start = Instant::now();
