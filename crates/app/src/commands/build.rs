@@ -20,8 +20,8 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
         Device::Gpu => {
             let ctx = super::gpu_context()?;
             let builder = gridrt_gpu::build::GridBuilder::new(&ctx)?;
-            let scene = gridrt_gpu::upload::GpuScene::new(&ctx, &tris)?;
-            let g = builder.build(&ctx, &scene, &tris, &cfg)?;
+            let scene = super::on_device(gridrt_gpu::upload::GpuScene::new(&ctx, &tris))?;
+            let g = super::on_device(builder.build(&ctx, &scene, &tris, &cfg))?;
             let grid = builder.read_back(&ctx, &g)?;
             let b = BuildReport {
                 kind: cfg.kind,
