@@ -33,6 +33,10 @@ pub enum BuiltOn {
     Worker,
     /// By the WGSL build kernels.
     Gpu,
+    /// On the CPU, because the GPU build asked for was beyond the device's buffer limits
+    /// (natively; the app's job thread).
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
+    CpuForGpu,
 }
 
 impl BuiltOn {
@@ -41,7 +45,14 @@ impl BuiltOn {
             BuiltOn::Cpu => "the CPU",
             BuiltOn::Worker => "the build worker",
             BuiltOn::Gpu => "the GPU",
+            BuiltOn::CpuForGpu => "the CPU (the device cannot hold the GPU build)",
         }
+    }
+
+    /// Whether it answers a request for a GPU build: built there, or on the CPU because the
+    /// device could not hold it (asking again would fail again).
+    pub fn answers_gpu_build(self) -> bool {
+        matches!(self, BuiltOn::Gpu | BuiltOn::CpuForGpu)
     }
 }
 
@@ -63,22 +74,36 @@ pub struct GpuBuild {
 }
 
 /// Builds `config` over `tris` on the GPU (flat or macrocell, box or exact insertion; see
-/// [`gridrt_gpu::build`]) and reads it back for the stats panel and the measurements. Natively
-/// it runs to the end on a job thread ([`build_on_gpu`]); in a browser it is awaited on the
-/// page (the readbacks resolve between frames).
+/// [`gridrt_gpu::build`]) and reads it back for the stats panel and the measurements, in a
+/// browser (awaited on the page: the readbacks resolve between frames). Natively it runs to the
+/// end on a job thread ([`build_on_gpu`]).
+#[cfg(target_arch = "wasm32")]
 pub async fn build_on_gpu_async(
     gpu: &GpuBuild,
     tris: &[[Vec3; 3]],
     config: &GridConfig,
     scene_generation: u64,
 ) -> Result<Built, String> {
-    let what = |e: gridrt_gpu::GpuError| format!("building the {} grid on the GPU: {e}", config.kind);
+    try_build_on_gpu(gpu, tris, config, scene_generation).await.map_err(|e| gpu_build_failed(config, &e))
+}
+
+fn gpu_build_failed(config: &GridConfig, e: &gridrt_gpu::GpuError) -> String {
+    format!("building the {} grid on the GPU: {e}", config.kind)
+}
+
+/// The GPU build, with the device's error.
+async fn try_build_on_gpu(
+    gpu: &GpuBuild,
+    tris: &[[Vec3; 3]],
+    config: &GridConfig,
+    scene_generation: u64,
+) -> Result<Built, gridrt_gpu::GpuError> {
     let started = web_time::Instant::now();
-    let scene = gridrt_gpu::upload::GpuScene::new(&gpu.ctx, tris).map_err(what)?;
+    let scene = gridrt_gpu::upload::GpuScene::new(&gpu.ctx, tris)?;
     let upload_ms = started.elapsed().as_secs_f64() * 1e3;
-    let mut g = gpu.builder.build_async(&gpu.ctx, &scene, tris, config).await.map_err(what)?;
+    let mut g = gpu.builder.build_async(&gpu.ctx, &scene, tris, config).await?;
     let start = web_time::Instant::now();
-    let grid = gpu.builder.read_back_async(&gpu.ctx, &g).await.map_err(what)?;
+    let grid = gpu.builder.read_back_async(&gpu.ctx, &g).await?;
     g.times.record_since("read back", start);
     let report = BuildReport {
         kind: config.kind,
@@ -93,7 +118,9 @@ pub async fn build_on_gpu_async(
     Ok(Built { scene_generation, config: *config, grid, report, built_on: BuiltOn::Gpu, pose: None, on_gpu })
 }
 
-/// [`build_on_gpu_async`] on this (job) thread, blocking.
+/// The GPU build on this (job) thread, blocking; a build beyond the device's buffer
+/// limits is made on the CPU instead ([`BuiltOn::CpuForGpu`]; its frames are then traced there
+/// when the device cannot hold the grid either).
 #[cfg(not(target_arch = "wasm32"))]
 pub fn build_on_gpu(
     gpu: &GpuBuild,
@@ -101,7 +128,14 @@ pub fn build_on_gpu(
     config: &GridConfig,
     scene_generation: u64,
 ) -> Result<Built, String> {
-    pollster::block_on(build_on_gpu_async(gpu, tris, config, scene_generation))
+    match pollster::block_on(try_build_on_gpu(gpu, tris, config, scene_generation)) {
+        Err(e @ gridrt_gpu::GpuError::BufferTooLarge { .. }) => {
+            log::warn!("{}: built on the CPU instead", gpu_build_failed(config, &e));
+            let built = build_structure(tris, config, scene_generation)?;
+            Ok(Built { built_on: BuiltOn::CpuForGpu, ..built })
+        }
+        r => r.map_err(|e| gpu_build_failed(config, &e)),
+    }
 }
 
 /// A scene posed for one animation frame.

@@ -122,7 +122,7 @@ impl GridrtApp {
                     b.built.scene_generation,
                     b.built.config,
                     b.built.pose.as_ref().map(|p| p.time),
-                    b.built.built_on == BuiltOn::Gpu,
+                    b.built.built_on.answers_gpu_build(),
                 )
             });
             let failed = self.errors.build_failed(&want)
