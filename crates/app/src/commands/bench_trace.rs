@@ -1,6 +1,7 @@
 //! `gridrt bench-trace SCENE`: Mrays/s of the CPU reference (all threads) and the GPU trace
 //! pass on the same camera (auto and framed views) and random rays, in one run, and of the CPU's
-//! and the GPU's coherent packets on the camera rays. Prints; asserts nothing.
+//! and the GPU's coherent packets on the camera rays. Prints; asserts nothing. A scene or grid
+//! the device cannot hold gets the CPU's figures alone, with a warning.
 
 use std::time::Instant;
 
@@ -13,6 +14,7 @@ use serde_json::json;
 
 use super::build_grid;
 use crate::cli::BenchTraceArgs;
+use crate::lab::sweep::fits_on_gpu;
 
 pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let (mesh, report) = super::load_scene(&args.scene)?;
@@ -20,8 +22,11 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let b = mesh.bounds();
     let (grid, build) = build_grid(&tris, &args.grid.config()?)?;
     let ctx = super::gpu_context()?;
-    let gpu = GpuSession::new(&ctx, &tris, b)?;
-    let gs = gpu.upload(&grid)?;
+    let session = fits_on_gpu(GpuSession::new(&ctx, &tris, b), &report.source)?;
+    let on_gpu = match &session {
+        Some(gpu) => fits_on_gpu(gpu.upload(&grid), &format!("the {} grid", grid.kind()))?.map(|gs| (gpu, gs)),
+        None => None,
+    };
     let opts = TraceOptions { traversal: args.traversal, mailbox: true, ..Default::default() };
     // Camera rays as whole 4:3 images of about `--rays` pixels, so packets tile them.
     let (width, height) = image_size(args.rays, 4.0 / 3.0);
@@ -51,7 +56,9 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     };
     // Warm-up on a whole set: compiles the pipeline and sizes the tracer's buffers, which a
     // few rays do not (the first full-size call also paid ~0.2 s on lavapipe).
-    gpu.trace(&gs, &sets[0].1, opts)?;
+    if let Some((gpu, gs)) = &on_gpu {
+        gpu.trace(gs, &sets[0].1, opts)?;
+    }
     let mut rows = Vec::new();
     for (name, rays, is_image) in &sets {
         // The hit share comes from the timed runs (every run gives the same hits).
@@ -66,16 +73,18 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
             })
         });
         let mut err = None;
-        let gpu_s = best(&mut || {
-            if let Err(e) = gpu.trace(&gs, rays, opts) {
-                err = Some(e);
-            }
+        let gpu_s = on_gpu.as_ref().map(|(gpu, gs)| {
+            best(&mut || {
+                if let Err(e) = gpu.trace(gs, rays, opts) {
+                    err = Some(e);
+                }
+            })
         });
         // The GPU's 8×8 packet kernels, where the kind has one.
         let gpu_packets = *is_image && gridrt_gpu::Kernel::for_kind(grid.kind()).packet_file().is_some();
-        let gpu_packet_s = gpu_packets.then(|| {
+        let gpu_packet_s = on_gpu.as_ref().filter(|_| gpu_packets).map(|(gpu, gs)| {
             best(&mut || {
-                if let Err(e) = gpu.trace_image(&gs, rays, width, opts) {
+                if let Err(e) = gpu.trace_image(gs, rays, width, opts) {
                     err = Some(e);
                 }
             })
@@ -87,8 +96,9 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
         rows.push(
             json!({"rays": name, "count": rays.len(), "hit_share": hits as f64 / n, "cpu_mrays_s": n / cpu_s / 1e6,
             "cpu_packets_mrays_s": packet_s.map(|s| n / s / 1e6), "packets_over_single": packet_s.map(|s| cpu_s / s),
-            "gpu_mrays_s": n / gpu_s / 1e6, "gpu_over_cpu": cpu_s / gpu_s,
-            "gpu_packets_mrays_s": gpu_packet_s.map(|s| n / s / 1e6), "gpu_packets_over_single": gpu_packet_s.map(|s| gpu_s / s)}),
+            "gpu_mrays_s": gpu_s.map(|s| n / s / 1e6), "gpu_over_cpu": gpu_s.map(|s| cpu_s / s),
+            "gpu_packets_mrays_s": gpu_packet_s.map(|s| n / s / 1e6),
+            "gpu_packets_over_single": gpu_packet_s.zip(gpu_s).map(|(p, s)| s / p)}),
         );
     }
     if args.json {
