@@ -754,6 +754,36 @@ fn app_screenshots_under_xvfb() {
     let cpu = centre_pixels(&shot_on("macrocell", "shaded", "on", true));
     let differ = capped.iter().zip(&cpu).filter(|(a, b)| a != b).count();
     assert_eq!(differ, 0, "{differ} of {} centre pixels differ from --cpu-trace's", cpu.len());
+    // A grid the device cannot hold while it holds the triangles: a fan of 200 thin triangles
+    // (9,600 bytes on the device) whose references take about twice that. Asked to build on the
+    // GPU, the app builds on the CPU instead and traces there.
+    let fan = tmp("app-fan.glb");
+    let ring = (0..200).map(|k| {
+        let a = k as f32 * std::f32::consts::TAU / 200.0;
+        glam::Vec3::new(a.cos(), 0.3 * (5.0 * a).sin(), a.sin())
+    });
+    let mesh = gridrt_scene::Mesh {
+        positions: std::iter::once(glam::Vec3::ZERO).chain(ring).collect(),
+        indices: (0..200u32).map(|k| [0, 1 + k, 1 + (k + 1) % 200]).collect(),
+    };
+    std::fs::write(&fan, gridrt_scene::glb_write::to_glb(&mesh, "fan")).unwrap();
+    let fan_shot = |extra: &[&str]| -> (Vec<[u8; 3]>, String) {
+        let png = out_dir.join(format!("app-fan{}.png", extra.len()));
+        let _ = std::fs::remove_file(&png);
+        let mut args = vec![s(&fan), "--screenshot", s(&png), "--frames", "3", "--render-scale", "0.5"];
+        args.extend_from_slice(extra);
+        let (succeeded, log) = x.app(&args);
+        assert!(succeeded, "app {extra:?} on the fan failed:\n{log}");
+        (centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8()), log)
+    };
+    let (capped, log) = fan_shot(&["--max-gpu-buffer", "12K", "--gpu-build"]);
+    assert!(
+        log.contains("on the CPU,") && log.contains("the device cannot hold the refs"),
+        "the fan's grid should be traced on the CPU, saying why:\n{log}"
+    );
+    let (cpu, _) = fan_shot(&["--cpu-trace"]);
+    let differ = capped.iter().zip(&cpu).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "the fan: {differ} of {} centre pixels differ from --cpu-trace's", cpu.len());
 
     // `--camera auto|framed|interior` (the Camera menu's views): the framed view fills the image
     // with the model, so its centre is lit and differs from the bounds-framing view's.

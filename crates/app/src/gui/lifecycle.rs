@@ -160,7 +160,14 @@ impl GridrtApp {
                 let uploaded = GpuScene::new(&g.ctx, &loaded.tris).and_then(|s| g.ctx.check_device().map(|()| s));
                 match held_on_cpu(uploaded) {
                     Ok(kept) => kept,
-                    Err(e) => return Err(format!("{}: {e} (the previous scene stays)", loaded.name)),
+                    Err(e) => {
+                        // Only the browser gets here with a scene too large for the device.
+                        let hint = match e {
+                            GpuError::BufferTooLarge { .. } => "; the desktop app traces such a scene on the CPU",
+                            _ => "",
+                        };
+                        return Err(format!("{}: {e} (the previous scene stays{hint})", loaded.name));
+                    }
                 }
             }
             None => (None, None),
