@@ -729,29 +729,30 @@ fn app_screenshots_under_xvfb() {
         );
     }
 
+    // A screenshot of `scene` with the flags `extra`: its centre pixels and the run's log.
+    let shot_with = |scene: &Path, png: &str, extra: &[&str]| -> (Vec<[u8; 3]>, String) {
+        let png = out_dir.join(png);
+        let _ = std::fs::remove_file(&png);
+        let mut args = vec![s(scene), "--screenshot", s(&png)];
+        args.extend_from_slice(extra);
+        let (succeeded, log) = x.app(&args);
+        assert!(succeeded, "app {extra:?} failed:\n{log}");
+        (centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8()), log)
+    };
+
     // A scene the device cannot hold (its storage bindings capped below the triangles' size by
     // `--max-gpu-buffer`): the app keeps it on the CPU, which traces the frames, and says why;
     // the image is the one `--cpu-trace` gives.
-    let capped = {
-        let png = out_dir.join("app-capped.png");
-        let _ = std::fs::remove_file(&png);
-        let out = gridrt_cmd()
-            .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--grid", "macrocell", "--view", "shaded"])
-            .args(["--camera", "0.25,0.18,0.35,0,0,0,50", "--render-scale", "0.5", "--packets", "on"])
-            .args(["--max-gpu-buffer", "4K"])
-            .env("DISPLAY", &x.display)
-            .env_remove("WAYLAND_DISPLAY")
-            .output()
-            .expect("running the app");
-        let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-        assert!(out.status.success(), "app --max-gpu-buffer 4K failed:\n{log}");
-        assert!(
-            log.contains("on the CPU,") && log.contains("the device cannot hold the triangles"),
-            "the capped device's frames should be traced on the CPU, saying why:\n{log}"
-        );
-        centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
-    };
-    let cpu = centre_pixels(&shot_on("macrocell", "shaded", "on", true));
+    let teapot =
+        ["--frames", "2", "--grid", "macrocell", "--view", "shaded", "--render-scale", "0.5", "--packets", "on"];
+    let inside = ["--camera", "0.25,0.18,0.35,0,0,0,50"];
+    let (capped, log) =
+        shot_with(scene.as_ref(), "app-capped.png", &[&teapot[..], &inside, &["--max-gpu-buffer", "4K"]].concat());
+    assert!(
+        log.contains("on the CPU,") && log.contains("the device cannot hold the triangles"),
+        "the capped device's frames should be traced on the CPU, saying why:\n{log}"
+    );
+    let (cpu, _) = shot_with(scene.as_ref(), "app-capped-cpu.png", &[&teapot[..], &inside, &["--cpu-trace"]].concat());
     let differ = capped.iter().zip(&cpu).filter(|(a, b)| a != b).count();
     assert_eq!(differ, 0, "{differ} of {} centre pixels differ from --cpu-trace's", cpu.len());
     // A grid the device cannot hold while it holds the triangles: a fan of 200 thin triangles
@@ -767,21 +768,17 @@ fn app_screenshots_under_xvfb() {
         indices: (0..200u32).map(|k| [0, 1 + k, 1 + (k + 1) % 200]).collect(),
     };
     std::fs::write(&fan, gridrt_scene::glb_write::to_glb(&mesh, "fan")).unwrap();
-    let fan_shot = |extra: &[&str]| -> (Vec<[u8; 3]>, String) {
-        let png = out_dir.join(format!("app-fan{}.png", extra.len()));
-        let _ = std::fs::remove_file(&png);
-        let mut args = vec![s(&fan), "--screenshot", s(&png), "--frames", "3", "--render-scale", "0.5"];
-        args.extend_from_slice(extra);
-        let (succeeded, log) = x.app(&args);
-        assert!(succeeded, "app {extra:?} on the fan failed:\n{log}");
-        (centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8()), log)
-    };
-    let (capped, log) = fan_shot(&["--max-gpu-buffer", "12K", "--gpu-build"]);
+    let fan_flags = ["--frames", "3", "--render-scale", "0.5"];
+    let (capped, log) = shot_with(
+        fan.as_ref(),
+        "app-fan-capped.png",
+        &[&fan_flags[..], &["--max-gpu-buffer", "12K", "--gpu-build"]].concat(),
+    );
     assert!(
         log.contains("on the CPU,") && log.contains("the device cannot hold the refs"),
         "the fan's grid should be traced on the CPU, saying why:\n{log}"
     );
-    let (cpu, _) = fan_shot(&["--cpu-trace"]);
+    let (cpu, _) = shot_with(fan.as_ref(), "app-fan-cpu.png", &[&fan_flags[..], &["--cpu-trace"]].concat());
     let differ = capped.iter().zip(&cpu).filter(|(a, b)| a != b).count();
     assert_eq!(differ, 0, "the fan: {differ} of {} centre pixels differ from --cpu-trace's", cpu.len());
 

@@ -728,9 +728,9 @@ pub fn sample_curve(
 }
 
 /// `curve` extended below its interval, for a grid of insertion `insert` when that is
-/// bounding-box insertion, while its coarsest sample is the one [`CostModel::best_sample`] takes and coarser grids exist: T(m)
-/// may keep falling there (long slivers, whose boxes cross many cells at m = ∛N, cost least with
-/// far fewer cells). Each round samples `model.samples / 2` more m geometrically from an eighth
+/// bounding-box insertion, while its coarsest sample is the one [`CostModel::best_sample`]
+/// takes and coarser grids exist: T(m) may keep falling there (long slivers, whose boxes cross
+/// many cells at m = ∛N, cost least with far fewer cells). Each round samples `model.samples / 2` more m geometrically from an eighth
 /// of the coarsest m (at least 1) up to below it, with `count` giving their N_m in one pass; the
 /// rounds stop at m = 1. Exact insertion keeps the interval (see the module doc).
 fn extended_below(

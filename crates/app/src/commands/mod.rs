@@ -67,7 +67,6 @@ pub fn build_grid(tris: &[[Vec3; 3]], cfg: &GridConfig) -> anyhow::Result<(AnyGr
 
 pub use crate::format::human_bytes;
 
-/// The GPU device, with its adapter reported on stderr.
 /// `r`, an upload of a scene or grid to the device, with a hint where the device cannot hold it:
 /// the CPU backend has no such limit.
 pub fn on_device<T>(r: Result<T, gridrt_gpu::GpuError>) -> anyhow::Result<T> {
@@ -79,6 +78,7 @@ pub fn on_device<T>(r: Result<T, gridrt_gpu::GpuError>) -> anyhow::Result<T> {
     })
 }
 
+/// The GPU device, with its adapter reported on stderr.
 pub fn gpu_context() -> anyhow::Result<gridrt_gpu::GpuContext> {
     let ctx = gridrt_gpu::GpuContext::new_headless_blocking()?;
     eprintln!("GPU adapter: {}", ctx.adapter_name());

@@ -281,9 +281,8 @@ impl GridrtApp {
             // The device holds nothing of a scene it could not hold.
             _ => Ok((None, None)),
         };
-        let ((gpu, posed_gpu), off_gpu) = match uploaded {
-            Ok((Some((s, p)), off)) => ((Some(s), p), off),
-            Ok((None, off)) => ((None, None), off),
+        let (on_device, off_gpu) = match uploaded {
+            Ok(u) => u,
             Err(e) => {
                 // The previous structure stays on screen; this configuration is not retried.
                 self.errors.report(
@@ -293,6 +292,7 @@ impl GridrtApp {
                 return;
             }
         };
+        let (gpu, posed_gpu) = on_device.map_or((None, None), |(s, p)| (Some(s), p));
         self.built_counter += 1;
         let upload_ms = started.elapsed().as_secs_f64() * 1e3;
         self.built = Some(BuiltState { built, gpu, posed_gpu, upload_ms, off_gpu, id: self.built_counter });

@@ -52,9 +52,9 @@ pub fn session<'a>(ctx: Option<&'a GpuContext>, sc: &LabScene) -> anyhow::Result
 }
 
 /// `r`'s value, or `None` with a warning when the device's buffers cannot hold what `what`
-/// needed (a scene or grid beyond its `max_storage_buffer_binding_size`: lavapipe's is 128 MiB,
-/// about 2.8M triangles): a measurement leaves the GPU out of it, as it would without a
-/// device, rather than end. Every other GPU error stays an error.
+/// needed (a scene or grid beyond its `max_storage_buffer_binding_size`; README, Limits): a
+/// measurement leaves the GPU out of it, as it would without a device, rather than end. Every
+/// other GPU error stays an error.
 pub fn fits_on_gpu<T>(r: Result<T, GpuError>, what: &str) -> Result<Option<T>, GpuError> {
     match r {
         Ok(v) => Ok(Some(v)),
