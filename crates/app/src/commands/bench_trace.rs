@@ -21,7 +21,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
     let tris = mesh.triangles();
     let b = mesh.bounds();
     let (grid, build) = build_grid(&tris, &args.grid.config()?)?;
-    let ctx = super::gpu_context()?;
+    let ctx = super::gpu_context(None)?;
     let session = fits_on_gpu(GpuSession::new(&ctx, &tris, b), &report.source)?;
     let on_gpu = match &session {
         Some(gpu) => fits_on_gpu(gpu.upload(&grid), &format!("the {} grid", grid.kind()))?.map(|gs| (gpu, gs)),

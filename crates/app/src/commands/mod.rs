@@ -78,11 +78,23 @@ pub fn on_device<T>(r: Result<T, gridrt_gpu::GpuError>) -> anyhow::Result<T> {
     })
 }
 
-/// The GPU device, with its adapter reported on stderr.
-pub fn gpu_context() -> anyhow::Result<gridrt_gpu::GpuContext> {
-    let ctx = gridrt_gpu::GpuContext::new_headless_blocking()?;
+/// The GPU device, with its adapter reported on stderr. `cpu_route`: the flag with which the
+/// command runs without a GPU (`--backend cpu`, `--no-gpu`), named when there is no adapter.
+pub fn gpu_context(cpu_route: Option<&str>) -> anyhow::Result<gridrt_gpu::GpuContext> {
+    let ctx = gridrt_gpu::GpuContext::new_headless_blocking().map_err(|e| without_gpu(e, cpu_route))?;
     eprintln!("GPU adapter: {}", ctx.adapter_name());
     Ok(ctx)
+}
+
+/// `e`, the failure to open the device, with `cpu_route` (the flag that runs the command
+/// without a GPU) named when there is no adapter at all.
+fn without_gpu(e: gridrt_gpu::GpuError, cpu_route: Option<&str>) -> anyhow::Error {
+    match (e, cpu_route) {
+        (e @ gridrt_gpu::GpuError::NoAdapter { .. }, Some(flag)) => {
+            anyhow::Error::new(e).context(format!("this command needs a GPU adapter ({flag} runs it without one)"))
+        }
+        (e, _) => e.into(),
+    }
 }
 
 #[cfg(test)]
@@ -99,5 +111,19 @@ mod tests {
         let text = format!("{:#}", super::on_device::<()>(Err(GpuError::Device("lost".into()))).unwrap_err());
         assert!(!text.contains("--backend cpu"), "{text}");
         assert_eq!(super::on_device(Ok(3)).unwrap(), 3);
+    }
+
+    /// No adapter at all names the command's way to run without one; another device error
+    /// (an adapter asked for by name and not found) does not.
+    #[test]
+    fn no_adapter_points_to_the_cpu_route() {
+        let none = || GpuError::NoAdapter { backends: wgpu::Backends::all() };
+        let text = format!("{:#}", super::without_gpu(none(), Some("--backend cpu")));
+        assert!(text.contains("--backend cpu runs it without one") && text.contains("mesa-vulkan-drivers"), "{text}");
+        let text = format!("{:#}", super::without_gpu(none(), None));
+        assert!(!text.contains("without one") && text.contains("no GPU adapter"), "{text}");
+        let e = GpuError::AdapterNotFound { wanted: "x".into(), found: vec![] };
+        let text = format!("{:#}", super::without_gpu(e, Some("--no-gpu")));
+        assert!(!text.contains("--no-gpu"), "{text}");
     }
 }

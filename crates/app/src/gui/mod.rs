@@ -519,6 +519,19 @@ pub fn wgpu_options(max_buffer: Option<u64>) -> eframe::egui_wgpu::WgpuConfigura
     WgpuConfiguration { wgpu_setup: WgpuSetup::CreateNew(setup), ..Default::default() }
 }
 
+/// What to do when the app cannot open a window because there is no display (a server, a
+/// container, a CI job): empty when a display is set.
+#[cfg(not(target_arch = "wasm32"))]
+fn no_display_hint() -> &'static str {
+    let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
+    if cfg!(target_os = "linux") && !set("DISPLAY") && !set("WAYLAND_DISPLAY") && !set("WAYLAND_SOCKET") {
+        " (no display here: run the app under Xvfb, e.g. `xvfb-run -a gridrt SCENE`, or use the \
+         command line, e.g. `gridrt render SCENE -o out.png`; `gridrt --help` lists the commands)"
+    } else {
+        ""
+    }
+}
+
 /// Runs the desktop app (blocking until its window closes).
 #[cfg(not(target_arch = "wasm32"))]
 pub fn run_native(args: AppArgs) -> anyhow::Result<()> {
@@ -538,7 +551,7 @@ pub fn run_native(args: AppArgs) -> anyhow::Result<()> {
         options,
         Box::new(move |cc| Ok(Box::new(GridrtApp::new(cc, args, st)) as Box<dyn eframe::App>)),
     )
-    .map_err(|e| anyhow::anyhow!("the app failed: {e}"))?;
+    .map_err(|e| anyhow::anyhow!("the app failed: {e}{}", no_display_hint()))?;
     if smoke {
         match status.lock().expect("smoke status").take() {
             Some(Ok(msg)) => println!("{msg}"),
