@@ -83,7 +83,7 @@ pub fn run(args: AnimateArgs) -> anyhow::Result<()> {
     let (shade, primary, trace_opts) = (&view.shade, &view.primary, view.trace_options());
     let packets = args.packets.options(trace_opts.mailbox);
     let ctx = match args.backend {
-        Device::Gpu => Some(super::gpu_context(Some("--backend cpu"))?),
+        Device::Gpu => Some(super::gpu_context(Some(super::CpuRoute::BackendCpu))?),
         Device::Cpu => None,
     };
     for dir in [&args.frames_dir, &args.out].into_iter().flatten() {

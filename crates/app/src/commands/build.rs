@@ -18,7 +18,7 @@ pub fn run(args: BuildArgs) -> anyhow::Result<()> {
             (grid, b, None)
         }
         Device::Gpu => {
-            let ctx = super::gpu_context(Some("--backend cpu"))?;
+            let ctx = super::gpu_context(Some(super::CpuRoute::BackendCpu))?;
             let builder = gridrt_gpu::build::GridBuilder::new(&ctx)?;
             let scene = super::on_device(gridrt_gpu::upload::GpuScene::new(&ctx, &tris))?;
             let g = super::on_device(builder.build(&ctx, &scene, &tris, &cfg))?;

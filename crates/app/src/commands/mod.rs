@@ -71,16 +71,36 @@ pub use crate::format::human_bytes;
 /// the CPU backend has no such limit.
 pub fn on_device<T>(r: Result<T, gridrt_gpu::GpuError>) -> anyhow::Result<T> {
     r.map_err(|e| match e {
-        gridrt_gpu::GpuError::BufferTooLarge { .. } => {
-            anyhow::Error::new(e).context("the device cannot hold this scene or grid (--backend cpu has no such limit)")
-        }
+        gridrt_gpu::GpuError::BufferTooLarge { .. } => anyhow::Error::new(e).context(format!(
+            "the device cannot hold this scene or grid ({} has no such limit)",
+            CpuRoute::BackendCpu.flag()
+        )),
         e => e.into(),
     })
 }
 
-/// The GPU device, with its adapter reported on stderr. `cpu_route`: the flag with which the
-/// command runs without a GPU (`--backend cpu`, `--no-gpu`), named when there is no adapter.
-pub fn gpu_context(cpu_route: Option<&str>) -> anyhow::Result<gridrt_gpu::GpuContext> {
+/// How a command runs without a GPU, named in its errors when the GPU cannot serve it.
+#[derive(Clone, Copy, Debug)]
+pub enum CpuRoute {
+    /// `render`, `trace`, `build`, `animate`: `--backend cpu`.
+    BackendCpu,
+    /// `bench` and the experiments: `--no-gpu`.
+    NoGpu,
+}
+
+impl CpuRoute {
+    /// The command-line flag.
+    pub fn flag(self) -> &'static str {
+        match self {
+            CpuRoute::BackendCpu => "--backend cpu",
+            CpuRoute::NoGpu => "--no-gpu",
+        }
+    }
+}
+
+/// The GPU device, with its adapter reported on stderr. `cpu_route`: how the command runs
+/// without a GPU, named when there is no adapter (`None`: it cannot).
+pub fn gpu_context(cpu_route: Option<CpuRoute>) -> anyhow::Result<gridrt_gpu::GpuContext> {
     let ctx = gridrt_gpu::GpuContext::new_headless_blocking().map_err(|e| without_gpu(e, cpu_route))?;
     eprintln!("GPU adapter: {}", ctx.adapter_name());
     Ok(ctx)
@@ -88,11 +108,10 @@ pub fn gpu_context(cpu_route: Option<&str>) -> anyhow::Result<gridrt_gpu::GpuCon
 
 /// `e`, the failure to open the device, with `cpu_route` (the flag that runs the command
 /// without a GPU) named when there is no adapter at all.
-fn without_gpu(e: gridrt_gpu::GpuError, cpu_route: Option<&str>) -> anyhow::Error {
+fn without_gpu(e: gridrt_gpu::GpuError, cpu_route: Option<CpuRoute>) -> anyhow::Error {
     match (e, cpu_route) {
-        (e @ gridrt_gpu::GpuError::NoAdapter { .. }, Some(flag)) => {
-            anyhow::Error::new(e).context(format!("this command needs a GPU adapter ({flag} runs it without one)"))
-        }
+        (e @ gridrt_gpu::GpuError::NoAdapter { .. }, Some(route)) => anyhow::Error::new(e)
+            .context(format!("this command needs a GPU adapter ({} runs it without one)", route.flag())),
         (e, _) => e.into(),
     }
 }
@@ -118,12 +137,12 @@ mod tests {
     #[test]
     fn no_adapter_points_to_the_cpu_route() {
         let none = || GpuError::NoAdapter { backends: wgpu::Backends::all() };
-        let text = format!("{:#}", super::without_gpu(none(), Some("--backend cpu")));
+        let text = format!("{:#}", super::without_gpu(none(), Some(super::CpuRoute::BackendCpu)));
         assert!(text.contains("--backend cpu runs it without one") && text.contains("mesa-vulkan-drivers"), "{text}");
         let text = format!("{:#}", super::without_gpu(none(), None));
         assert!(!text.contains("without one") && text.contains("no GPU adapter"), "{text}");
         let e = GpuError::AdapterNotFound { wanted: "x".into(), found: vec![] };
-        let text = format!("{:#}", super::without_gpu(e, Some("--no-gpu")));
+        let text = format!("{:#}", super::without_gpu(e, Some(super::CpuRoute::NoGpu)));
         assert!(!text.contains("--no-gpu"), "{text}");
     }
 }

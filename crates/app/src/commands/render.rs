@@ -49,7 +49,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 "the GPU's packet kernels trace {0}x{0} packets: --tile {tile} needs --backend cpu",
                 gridrt_gpu::Kernel::PACKET_EDGE,
             );
-            let ctx = super::gpu_context(Some("--backend cpu"))?;
+            let ctx = super::gpu_context(Some(super::CpuRoute::BackendCpu))?;
             let gpu = super::on_device(GpuSession::new(&ctx, &tris, bounds))?;
             let gs = super::on_device(gpu.upload(&grid))?;
             // Warm-up on a small frame: pipeline compilation stays out of the timing.

@@ -36,7 +36,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         }
         Backend::Gpu => {
             let (grid, b) = build_grid(&tris, &args.grid.config()?)?;
-            let ctx = super::gpu_context(Some("--backend cpu"))?;
+            let ctx = super::gpu_context(Some(super::CpuRoute::BackendCpu))?;
             let gpu = super::on_device(gridrt_gpu::GpuSession::new(&ctx, &tris, mesh.bounds()))?;
             let gs = super::on_device(gpu.upload(&grid))?;
             // Warm-up (pipeline creation) outside the timing.
