@@ -131,6 +131,21 @@ const INTERACTIVE_FRAME_MS: f64 = 60.0;
 /// How long after the last camera move the view counts as resting.
 const REST_AFTER_S: f64 = 0.3;
 
+/// While a frame is being traced the native UI sleeps: the CPU trace's job and the GPU tile
+/// waiter wake it when their work is done (the interval is only a fallback). Repainting the
+/// window meanwhile, as it did, took about a third of the two cores on a software adapter
+/// (README, "Dynamic scenes in the app"). In a browser nothing wakes the UI when the GPU is
+/// done, so it polls every frame.
+fn wait_for_frame(ctx: &egui::Context) {
+    #[cfg(not(target_arch = "wasm32"))]
+    ctx.request_repaint_after(std::time::Duration::from_millis(FRAME_POLL_MS));
+    #[cfg(target_arch = "wasm32")]
+    ctx.request_repaint();
+}
+
+/// See [`wait_for_frame`] (and smoke mode, which polls as seldom).
+const FRAME_POLL_MS: u64 = 250;
+
 impl std::fmt::Debug for GridrtApp {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("GridrtApp").field("settings", &self.settings).finish_non_exhaustive()
@@ -345,7 +360,9 @@ impl GridrtApp {
             self.last_key = Some(key);
         }
         let source = on_device.map(|(gs, s)| FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds });
-        match self.viewport.step(gpu, source.as_ref()).and_then(|done| gpu.ctx.check_device().map(|()| done)) {
+        let step = self.viewport.step(gpu, source.as_ref()).and_then(|done| gpu.ctx.check_device().map(|()| done));
+        let completed = matches!(step, Ok(true));
+        match step {
             // A finished frame ends an earlier render error.
             Ok(true) => {
                 self.errors.clear(|k| *k == ErrorKind::Render);
@@ -371,8 +388,11 @@ impl GridrtApp {
             }
         }
         self.frame_current = true;
-        if self.viewport.busy() {
+        if completed {
+            // The next frame (of an animation, of smoke mode) starts in the next pass.
             ui.ctx().request_repaint();
+        } else if self.viewport.busy() {
+            wait_for_frame(ui.ctx());
         }
     }
 }

@@ -45,7 +45,9 @@ impl GridrtApp {
         let on_gpu = self.built.as_ref().is_some_and(|b| b.built.built_on == BuiltOn::Gpu);
         let off_gpu = self.off_gpu().map_or(String::new(), |why| format!("; {why}"));
         let Some(s) = &mut self.smoke else { return };
-        ctx.request_repaint();
+        // Polled, not a repaint loop: finished frames and jobs wake the UI themselves, and a
+        // loop would take the cores from the frames being timed.
+        ctx.request_repaint_after(std::time::Duration::from_millis(super::FRAME_POLL_MS));
         if s.started.elapsed().as_secs_f64() > SMOKE_TIMEOUT_S {
             let why = format!("smoke run timed out after {SMOKE_TIMEOUT_S} s ({frames_done} frames done)");
             self.fail_smoke(ctx, why);

@@ -350,8 +350,11 @@ impl Viewport {
         f.tile = Some((count, started, done));
         if f.next == f.n {
             let (totals, t) = flag();
+            let ui = gpu.ui.clone();
             target.totals_read.slice(..).map_async(wgpu::MapMode::Read, move |r| {
                 *t.lock().expect("totals lock") = Some(r.map(|()| Instant::now()).map_err(|e| e.to_string()));
+                // The frame is done: wake the UI to show it (it does not repaint while waiting).
+                ui.request_repaint();
             });
             f.totals = Some(totals);
         }
