@@ -131,9 +131,9 @@ const INTERACTIVE_FRAME_MS: f64 = 60.0;
 /// How long after the last camera move the view counts as resting.
 const REST_AFTER_S: f64 = 0.3;
 
-/// While a frame is being traced the native UI sleeps: the CPU trace's job and the GPU tile
-/// waiter wake it when their work is done (the interval is only a fallback). Repainting the
-/// window meanwhile, as it did, took about a third of the two cores on a software adapter
+/// While a frame is being traced the native UI sleeps: the CPU trace's job, the GPU tile
+/// waiter and the totals' readback wake it when their work is done (the interval is only a
+/// fallback). Repainting the window meanwhile took cores from the tracer on a software adapter
 /// (README, "Dynamic scenes in the app"). In a browser nothing wakes the UI when the GPU is
 /// done, so it polls every frame.
 fn wait_for_frame(ctx: &egui::Context) {
