@@ -106,6 +106,12 @@ pub fn gpu_context(cpu_route: Option<CpuRoute>) -> anyhow::Result<gridrt_gpu::Gp
     Ok(ctx)
 }
 
+/// The GPU device unless `no_gpu` (`bench` and the experiments' `--no-gpu`, which their
+/// errors name when there is no adapter).
+pub fn gpu_unless(no_gpu: bool) -> anyhow::Result<Option<gridrt_gpu::GpuContext>> {
+    if no_gpu { Ok(None) } else { gpu_context(Some(CpuRoute::NoGpu)).map(Some) }
+}
+
 /// `e`, the failure to open the device, with `cpu_route` (the flag that runs the command
 /// without a GPU) named when there is no adapter at all.
 fn without_gpu(e: gridrt_gpu::GpuError, cpu_route: Option<CpuRoute>) -> anyhow::Error {

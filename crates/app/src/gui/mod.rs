@@ -360,11 +360,11 @@ impl GridrtApp {
             self.last_key = Some(key);
         }
         let source = on_device.map(|(gs, s)| FrameSource { scene: gs, structure: s, bounds: &scene.loaded.bounds });
-        let step = self.viewport.step(gpu, source.as_ref()).and_then(|done| gpu.ctx.check_device().map(|()| done));
-        let completed = matches!(step, Ok(true));
-        match step {
-            // A finished frame ends an earlier render error.
+        match self.viewport.step(gpu, source.as_ref()).and_then(|done| gpu.ctx.check_device().map(|()| done)) {
+            // A finished frame ends an earlier render error; the next frame (of an animation,
+            // of smoke mode) starts in the next pass.
             Ok(true) => {
+                ui.ctx().request_repaint();
                 self.errors.clear(|k| *k == ErrorKind::Render);
                 if let (Some(tl), Some(p), Some(f)) = (&mut self.timeline, &b.built.pose, &self.viewport.last)
                     && self.recorded != b.id
@@ -388,10 +388,7 @@ impl GridrtApp {
             }
         }
         self.frame_current = true;
-        if completed {
-            // The next frame (of an animation, of smoke mode) starts in the next pass.
-            ui.ctx().request_repaint();
-        } else if self.viewport.busy() {
+        if self.viewport.busy() {
             wait_for_frame(ui.ctx());
         }
     }

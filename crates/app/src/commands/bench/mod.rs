@@ -504,7 +504,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         return dynamic::run(&args, &cost);
     }
     let scenes = pick_scenes(&args)?;
-    let gpu = if args.no_gpu { None } else { Some(super::gpu_context(Some(super::CpuRoute::NoGpu))?) };
+    let gpu = super::gpu_unless(args.no_gpu)?;
     let subjects = Subject::all(!args.no_peers).len();
     let steps = subjects + usize::from(!args.no_auto_check);
     let pb = progress((scenes.len() * steps) as u64, "bench");

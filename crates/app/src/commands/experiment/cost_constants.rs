@@ -146,8 +146,7 @@ fn micro_cpu() -> (f64, f64) {
 
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(args)?;
-    let ctx =
-        if args.no_gpu { None } else { Some(crate::commands::gpu_context(Some(crate::commands::CpuRoute::NoGpu))?) };
+    let ctx = crate::commands::gpu_unless(args.no_gpu)?;
     let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
     let flat_samples = if args.quick { 3 } else { 6 };
     let pb = progress((scenes.len() * (flat_samples + 4)) as u64, "constants");

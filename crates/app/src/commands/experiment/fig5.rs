@@ -52,8 +52,7 @@ pub struct Summary {
 
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(args)?;
-    let ctx =
-        if args.no_gpu { None } else { Some(crate::commands::gpu_context(Some(crate::commands::CpuRoute::NoGpu))?) };
+    let ctx = crate::commands::gpu_unless(args.no_gpu)?;
     // The constants the command line's auto resolution uses: the calibration when saved.
     let (model, note) = crate::config::calibration::active_cost_model();
     eprintln!("fig5: cost model with {note}");

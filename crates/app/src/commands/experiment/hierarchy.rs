@@ -30,8 +30,7 @@ type Metric = (&'static str, &'static str, bool, fn(&Row) -> Option<f64>);
 
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let scenes = pick_scenes(args)?;
-    let ctx =
-        if args.no_gpu { None } else { Some(crate::commands::gpu_context(Some(crate::commands::CpuRoute::NoGpu))?) };
+    let ctx = crate::commands::gpu_unless(args.no_gpu)?;
     let rays_n = if args.quick { args.rays.min(10_000) } else { args.rays };
     let pb = progress((scenes.len() * GridKind::ALL.len()) as u64, "hierarchy");
     let mut rows = Vec::new();
