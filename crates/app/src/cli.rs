@@ -95,9 +95,13 @@ pub struct AppArgs {
     /// Insert triangles by exact triangle/box overlap (overrides the saved setting).
     #[arg(long)]
     pub exact: bool,
-    /// Trace the frames on the CPU, on every core, instead of the GPU (overrides the saved
-    /// setting; faster where the adapter is a software one).
-    #[arg(long)]
+    /// Where to trace the frames (overrides the saved setting): auto (the default) traces on
+    /// the CPU, on every core, when the adapter is a software one (lavapipe, SwiftShader), and
+    /// on the GPU otherwise. The same image either way.
+    #[arg(long, value_enum)]
+    pub trace_on: Option<crate::gui::settings::TraceOn>,
+    /// The same as `--trace-on cpu`.
+    #[arg(long, conflicts_with = "trace_on")]
     pub cpu_trace: bool,
     /// Cap the device's storage-buffer binding size at this many bytes, e.g. 128M (WebGPU's
     /// default and lavapipe's limit), to see how the app handles a device that cannot hold a

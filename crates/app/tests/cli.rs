@@ -678,7 +678,7 @@ fn app_screenshots_under_xvfb() {
             // Inside the stadium, close to the knot: the walls are far behind it.
             .args([s(&scene), "--screenshot", s(&png), "--frames", "2", "--grid", grid, "--view", view])
             .args(["--camera", "0.25,0.18,0.35,0,0,0,50", "--render-scale", "0.5", "--packets", packets])
-            .args(cpu.then_some("--cpu-trace"))
+            .args(["--trace-on", if cpu { "cpu" } else { "gpu" }])
             .env("DISPLAY", &x.display)
             .env_remove("WAYLAND_DISPLAY")
             .output()
@@ -713,7 +713,7 @@ fn app_screenshots_under_xvfb() {
         (centre_pixels(&shot("flat", "shaded", "off")), centre_pixels(&shot("flat", "shaded", "on")));
     assert_eq!(single, packets, "the app's flat frame in packets differs from single rays");
 
-    // Frames traced on the CPU (`--cpu-trace`): the GPU's image, in single rays, in packets and
+    // Frames traced on the CPU (`--trace-on cpu`): the GPU's image, in single rays, in packets and
     // in a heatmap.
     for (grid, view, packets) in
         [("flat", "shaded", "off"), ("macrocell", "shaded", "on"), ("macrocell", "heatmap-cells", "off")]
@@ -742,12 +742,16 @@ fn app_screenshots_under_xvfb() {
 
     // A scene the device cannot hold (its storage bindings capped below the triangles' size by
     // `--max-gpu-buffer`): the app keeps it on the CPU, which traces the frames, and says why;
-    // the image is the one `--cpu-trace` gives.
+    // the image is the one `--cpu-trace` gives. (Asked to trace on the GPU, which auto would
+    // not do on a software adapter.)
     let teapot =
         ["--frames", "2", "--grid", "macrocell", "--view", "shaded", "--render-scale", "0.5", "--packets", "on"];
     let inside = ["--camera", "0.25,0.18,0.35,0,0,0,50"];
-    let (capped, log) =
-        shot_with(scene.as_ref(), "app-capped.png", &[&teapot[..], &inside, &["--max-gpu-buffer", "4K"]].concat());
+    let (capped, log) = shot_with(
+        scene.as_ref(),
+        "app-capped.png",
+        &[&teapot[..], &inside, &["--max-gpu-buffer", "4K", "--trace-on", "gpu"]].concat(),
+    );
     assert!(
         log.contains("on the CPU,") && log.contains("the device cannot hold the triangles"),
         "the capped device's frames should be traced on the CPU, saying why:\n{log}"
@@ -772,23 +776,30 @@ fn app_screenshots_under_xvfb() {
     let (capped, log) = shot_with(
         fan.as_ref(),
         "app-fan-capped.png",
-        &[&fan_flags[..], &["--max-gpu-buffer", "12K", "--gpu-build"]].concat(),
+        &[&fan_flags[..], &["--max-gpu-buffer", "12K", "--gpu-build", "--trace-on", "gpu"]].concat(),
     );
     assert!(
         log.contains("on the CPU,") && log.contains("the device cannot hold the refs"),
         "the fan's grid should be traced on the CPU, saying why:\n{log}"
     );
-    let (cpu, _) = shot_with(fan.as_ref(), "app-fan-cpu.png", &[&fan_flags[..], &["--cpu-trace"]].concat());
+    let (cpu, _) = shot_with(fan.as_ref(), "app-fan-cpu.png", &[&fan_flags[..], &["--trace-on", "cpu"]].concat());
     let differ = capped.iter().zip(&cpu).filter(|(a, b)| a != b).count();
     assert_eq!(differ, 0, "the fan: {differ} of {} centre pixels differ from --cpu-trace's", cpu.len());
 
     // `--camera auto|framed|interior` (the Camera menu's views): the framed view fills the image
     // with the model, so its centre is lit and differs from the bounds-framing view's.
+    // These run with the default `--trace-on auto`: the CPU traces on a software adapter.
     let view_shot = |camera: &str| -> Vec<[u8; 3]> {
         let png = out_dir.join(format!("app-camera-{camera}.png"));
         let (succeeded, log) =
             x.app(&[s(&scene), "--screenshot", s(&png), "--frames", "2", "--render-scale", "0.5", "--camera", camera]);
         assert!(succeeded && log.contains("saved"), "app --camera {camera} failed:\n{log}");
+        let software = log.contains(", Cpu)");
+        assert!(
+            log.contains("trace on auto") && log.contains(if software { "ms on the CPU" } else { "ms on the GPU" }),
+            "auto should trace on the {}:\n{log}",
+            if software { "CPU (software adapter)" } else { "GPU" }
+        );
         centre_pixels(&image::open(&png).expect("reading the screenshot").to_rgba8())
     };
     let auto = view_shot("auto");
@@ -802,8 +813,12 @@ fn app_screenshots_under_xvfb() {
 
     // A 3840×2160 frame (more pixels than one storage binding holds): rendered in tiles.
     let png = out_dir.join("app-3840x2160.png");
-    let (succeeded, log) = x.app(&["--screenshot", s(&png), "--frames", "1", "--frame-size", "3840x2160"]);
-    assert!(succeeded && log.contains("last frame 3840x2160"), "a 3840x2160 frame:\n{log}");
+    let (succeeded, log) =
+        x.app(&["--screenshot", s(&png), "--frames", "1", "--frame-size", "3840x2160", "--trace-on", "gpu"]);
+    assert!(
+        succeeded && log.contains("last frame 3840x2160") && log.contains("on the GPU"),
+        "a 3840x2160 frame:\n{log}"
+    );
 
     // The cost-model window's measurement: a flat grid timed at every sampled resolution.
     let png = out_dir.join("app-cost-model.png");
@@ -867,7 +882,7 @@ fn app_screenshots_under_xvfb() {
     assert!(differ * 100 > a.len(), "the poses at 0.3 s and 2.1 s look the same ({differ} pixels differ)");
     // Rebuilt on the GPU every frame (the same grid; its stats show it was built there).
     let png = out_dir.join("app-crowd-gpu-build.png");
-    let (good, log) = app(&["--screenshot", s(&png), "--frames", "5", "--gpu-build"]);
+    let (good, log) = app(&["--screenshot", s(&png), "--frames", "5", "--gpu-build", "--trace-on", "gpu"]);
     assert!(good && log.contains("structure built on the GPU"), "--gpu-build:\n{log}");
     // One frame more or less than asked: the screenshot's own frame may show the next pose.
     assert!((4..=6).contains(&shown(&log)), "{log}");

@@ -161,6 +161,12 @@ impl GpuContext {
         GpuContext { adapter, device, queue, info, device_errors }
     }
 
+    /// Whether the adapter is a software one running on the CPU's cores (lavapipe,
+    /// SwiftShader, WARP), which traces slower than the kernels' CPU ports.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// The adapter with its driver and version, as every benchmark names it:
     /// "llvmpipe (LLVM 15.0.6, 256 bits), Mesa 25.0.7 (LLVM 15.0.6) (Vulkan, Cpu)".
     pub fn adapter_name(&self) -> String {

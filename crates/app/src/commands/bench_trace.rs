@@ -148,7 +148,7 @@ pub fn run(args: BenchTraceArgs) -> anyhow::Result<()> {
             num(&r["gpu_packets_over_single"], 2)
         );
     }
-    if ctx.info.device_type == wgpu::DeviceType::Cpu {
+    if ctx.is_software() {
         // The question users ask first when the "GPU" loses: say what it is.
         println!(
             "note: the GPU is a software adapter running on the same CPU cores (README, \"Structures and CPU vs GPU\")"

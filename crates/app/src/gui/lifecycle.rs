@@ -234,10 +234,15 @@ impl GridrtApp {
         scene.off_gpu.as_deref().or_else(|| built.and_then(|b| b.off_gpu.as_deref()))
     }
 
-    /// Whether the CPU traces the frames: the settings ask for it, or the device cannot hold
-    /// what is on screen ([`GridrtApp::off_gpu`]).
+    /// Whether the CPU traces the frames: the settings ask for it (or for auto, on a software
+    /// adapter), or the device cannot hold what is on screen ([`GridrtApp::off_gpu`]).
     pub(super) fn cpu_traces(&self) -> bool {
-        self.settings.cpu_traces() || self.off_gpu().is_some()
+        self.settings.cpu_traces(self.software_adapter()) || self.off_gpu().is_some()
+    }
+
+    /// Whether the adapter runs on the CPU's own cores (lavapipe, SwiftShader, WARP).
+    pub(super) fn software_adapter(&self) -> bool {
+        self.gpu.as_ref().is_some_and(|g| g.ctx.is_software())
     }
 
     /// The device to build on when the settings ask for GPU builds (not for a scene it cannot

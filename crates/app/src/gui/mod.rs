@@ -192,7 +192,10 @@ impl GridrtApp {
             settings.grid.build.insert = gridrt_grid::InsertMode::Exact;
         }
         if args.cpu_trace {
-            settings.cpu_trace = true;
+            settings.trace_on = settings::TraceOn::Cpu;
+        }
+        if let Some(t) = args.trace_on {
+            settings.trace_on = t;
         }
         if args.measure {
             settings.show_cost_plot = true;
@@ -416,7 +419,8 @@ impl eframe::App for GridrtApp {
             egui::ScrollArea::vertical().show(ui, |ui| {
                 let built = self.built.as_ref().map(|b| &b.built);
                 let off_gpu = self.off_gpu().map(str::to_owned);
-                panels::controls(ui, &mut self.settings, built, off_gpu.as_deref());
+                let software = self.software_adapter();
+                panels::controls(ui, &mut self.settings, built, off_gpu.as_deref(), software);
             });
         });
         egui::Panel::right("stats").resizable(true).default_size(270.0).size_range(180.0..=480.0).show(ui, |ui| {

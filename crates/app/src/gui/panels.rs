@@ -46,8 +46,16 @@ fn res_choice(r: Option<Resolution>) -> ResChoice {
 
 /// Structure, traversal and view controls. `built` gives the live numbers next to them.
 /// `off_gpu`: natively, why the CPU traces whatever the settings say (the device cannot hold
-/// the scene or the structure).
-pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>, off_gpu: Option<&str>) {
+/// the scene or the structure); `software_adapter`: what "auto" picks for the trace.
+pub fn controls(
+    ui: &mut egui::Ui,
+    s: &mut Settings,
+    built: Option<&Built>,
+    off_gpu: Option<&str>,
+    software_adapter: bool,
+) {
+    #[cfg(target_arch = "wasm32")]
+    let _ = software_adapter;
     ui.heading("Structure");
     let g = &mut s.grid;
     egui::ComboBox::from_label("grid").selected_text(g.kind.name()).show_ui(ui, |ui| {
@@ -237,14 +245,25 @@ pub fn controls(ui: &mut egui::Ui, s: &mut Settings, built: Option<&Built>, off_
         .on_hover_text("Primary and shadow rays traced in 8×8 packets that walk the grid slice by slice (on the GPU: flat and macrocell grids, the others single rays; on the CPU: every grid, a hierarchy's child grids layer by layer)");
     #[cfg(not(target_arch = "wasm32"))]
     {
-        let mut on = s.cpu_trace || off_gpu.is_some();
-        ui.add_enabled(off_gpu.is_none(), egui::Checkbox::new(&mut on, "trace on the CPU")).on_hover_text(
-            "Frames traced by the render kernels' CPU ports on every core (`--cpu-trace`): faster than \
-             a software adapter; the same image. Packets are faster than single rays there.",
-        );
-        if off_gpu.is_none() {
-            s.cpu_trace = on;
-        }
+        use super::settings::TraceOn;
+        let auto = if software_adapter { "auto (CPU: software adapter)" } else { "auto (GPU)" };
+        let label = |t: TraceOn| if t == TraceOn::Auto { auto.to_string() } else { t.name().to_string() };
+        ui.add_enabled_ui(off_gpu.is_none(), |ui| {
+            egui::ComboBox::from_label("trace on")
+                .selected_text(if off_gpu.is_some() { "CPU".to_string() } else { label(s.trace_on) })
+                .show_ui(ui, |ui| {
+                    for &t in <TraceOn as clap::ValueEnum>::value_variants() {
+                        ui.selectable_value(&mut s.trace_on, t, label(t));
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "Where the frames are traced (`--trace-on`): the render kernels on the GPU, or their \
+                     CPU ports on every core; the same image. Auto takes the CPU when the adapter is a \
+                     software one, which runs the kernels on the same cores, slower. Packets are faster \
+                     than single rays on the CPU.",
+                );
+        });
         if let Some(why) = off_gpu {
             ui.small(why);
         }

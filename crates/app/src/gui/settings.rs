@@ -27,18 +27,48 @@ pub struct Settings {
     /// Build flat and macrocell grids (box or exact insertion) on the GPU (the native app; the result is
     /// the CPU build's, bit for bit).
     pub gpu_build: bool,
-    /// Trace the frames on the CPU (the render kernels' CPU ports on every core; native app):
-    /// faster than a software adapter, the same image.
-    pub cpu_trace: bool,
+    /// Where the frames are traced (native app; the browser always traces on the GPU).
+    pub trace_on: TraceOn,
     pub show_cost_plot: bool,
     pub show_explainer: bool,
     pub explainer: super::explainer::ExplainerState,
 }
 
+/// Where the app traces its frames: the render kernels on the GPU, or their CPU ports on
+/// every core (the same image, pixel for pixel).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum TraceOn {
+    /// The CPU when the adapter is a software one (lavapipe, SwiftShader, WARP: it runs the
+    /// kernels on the same cores, slower than the CPU ports), the GPU otherwise.
+    #[default]
+    Auto,
+    /// The render kernels on the GPU (compute shaders; packets where the settings ask).
+    Gpu,
+    /// The kernels' CPU ports on every core.
+    Cpu,
+}
+
+impl TraceOn {
+    pub fn name(self) -> &'static str {
+        match self {
+            TraceOn::Auto => "auto",
+            TraceOn::Gpu => "GPU",
+            TraceOn::Cpu => "CPU",
+        }
+    }
+}
+
 impl Settings {
-    /// Whether the CPU traces the frames (only natively; the browser always traces on the GPU).
-    pub fn cpu_traces(&self) -> bool {
-        cfg!(not(target_arch = "wasm32")) && self.cpu_trace
+    /// Whether the CPU traces the frames when the adapter is (`software_adapter`) or is not a
+    /// software one. Only natively: the browser always traces on the GPU.
+    pub fn cpu_traces(&self, software_adapter: bool) -> bool {
+        cfg!(not(target_arch = "wasm32"))
+            && match self.trace_on {
+                TraceOn::Auto => software_adapter,
+                TraceOn::Gpu => false,
+                TraceOn::Cpu => true,
+            }
     }
 }
 
@@ -48,14 +78,16 @@ impl Default for Settings {
             grid: GridConfig::default(),
             traversal: Traversal::AmanatidesWoo,
             mailbox: true,
-            // Off: on the software adapter the packet kernels are slower than single rays
-            // (README, "Coherent grid traversal").
-            packets: false,
+            // Natively on: the CPU's packets are faster than its single rays, and on a software
+            // adapter (where the GPU's packet kernels are slower than its single rays) the CPU
+            // traces by default. Off in the browser, which traces on the GPU (README, "Coherent
+            // grid traversal").
+            packets: cfg!(not(target_arch = "wasm32")),
             view: View::Shaded,
             heat_max: 64.0,
             render_scale: 0.5,
             gpu_build: false,
-            cpu_trace: false,
+            trace_on: TraceOn::Auto,
             show_cost_plot: false,
             show_explainer: false,
             explainer: Default::default(),
@@ -82,5 +114,12 @@ mod tests {
         // A file from an older version, with fields missing, still loads.
         let old: Settings = serde_json::from_str(r#"{"mailbox": false, "render_scale": 0.25}"#).unwrap();
         assert_eq!(old, Settings { mailbox: false, render_scale: 0.25, ..Settings::default() });
+        // Before `trace_on` there was a `cpu_trace` switch: such a file loads, with auto.
+        let old: Settings = serde_json::from_str(r#"{"cpu_trace": true, "packets": false}"#).unwrap();
+        assert_eq!(old, Settings { packets: false, ..Settings::default() });
+        let cpu: Settings = serde_json::from_str(r#"{"trace_on": "cpu"}"#).unwrap();
+        assert!(cpu.cpu_traces(false) == cfg!(not(target_arch = "wasm32")));
+        assert!(!Settings::default().cpu_traces(false));
+        assert!(Settings::default().cpu_traces(true) == cfg!(not(target_arch = "wasm32")));
     }
 }

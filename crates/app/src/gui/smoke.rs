@@ -44,6 +44,8 @@ impl GridrtApp {
         let animation = self.animation_stats();
         let on_gpu = self.built.as_ref().is_some_and(|b| b.built.built_on == BuiltOn::Gpu);
         let off_gpu = self.off_gpu().map_or(String::new(), |why| format!("; {why}"));
+        let adapter = self.gpu.as_ref().map_or("none".into(), |g| g.ctx.adapter_name());
+        let trace_on = self.settings.trace_on.name();
         let Some(s) = &mut self.smoke else { return };
         // Polled, not a repaint loop: finished frames and jobs wake the UI themselves, and a
         // loop would take the cores from the frames being timed.
@@ -67,7 +69,8 @@ impl GridrtApp {
             .map(|()| {
                 let f = self.viewport.last;
                 format!(
-                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}{}{}{}",
+                    "saved {}x{} screenshot to {} after {frames_done} frames{}{}{}{}{}; trace on {trace_on}; \
+                     adapter {adapter}",
                     w,
                     h,
                     s.path.display(),

@@ -47,7 +47,7 @@ pub struct FrameStats {
     pub ms: f64,
     pub totals: FrameTotals,
     pub view: View,
-    /// Traced on the CPU (`Settings::cpu_trace`), not on the GPU.
+    /// Traced on the CPU (`Settings::trace_on`), not on the GPU.
     pub on_cpu: bool,
 }
 
@@ -125,7 +125,7 @@ pub struct Viewport {
     pub last: Option<FrameStats>,
     /// Frames completed since start.
     pub frames_done: u64,
-    /// Natively, frames traced on the CPU instead (`Settings::cpu_trace`).
+    /// Natively, frames traced on the CPU instead (`Settings::trace_on`).
     #[cfg(not(target_arch = "wasm32"))]
     cpu: CpuFrames,
 }
