@@ -568,7 +568,12 @@ fn gpu_trace_and_render() {
     assert!(out.contains("colour scale"), "{out}");
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
-    ok(&["render", s(&scene), "--size", "64x48", "--camera", "0,0.5,6,0,0,0,40", "-o", s(&png)]);
+    // On a software adapter the GPU commands point to the CPU backend (and on no other).
+    let out = gridrt(&["render", s(&scene), "--size", "64x48", "--camera", "0,0.5,6,0,0,0,40", "-o", s(&png)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let adapter = err.lines().find(|l| l.starts_with("GPU adapter:")).unwrap_or_else(|| panic!("no adapter:\n{err}"));
+    assert_eq!(adapter.ends_with(", Cpu)"), err.contains("`--backend cpu` gives the same results"), "{err}");
     // The GPU frame's passes timed apart: the shaded view traces shadow rays, a heatmap none.
     for (view, shadows) in [("shaded", true), ("heatmap-tests", false)] {
         let out = ok(&["render", s(&scene), "--size", "64x48", "--view", view, "--json", "-o", s(&png)]);

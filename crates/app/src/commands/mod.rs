@@ -103,6 +103,13 @@ impl CpuRoute {
 pub fn gpu_context(cpu_route: Option<CpuRoute>) -> anyhow::Result<gridrt_gpu::GpuContext> {
     let ctx = gridrt_gpu::GpuContext::new_headless_blocking().map_err(|e| without_gpu(e, cpu_route))?;
     eprintln!("GPU adapter: {}", ctx.adapter_name());
+    if ctx.is_software() && matches!(cpu_route, Some(CpuRoute::BackendCpu)) {
+        // The question users ask first when the "GPU" is slow (README, "Structures and CPU vs GPU").
+        eprintln!(
+            "note: this adapter is a software one, running on the CPU's own cores: `--backend cpu` gives the \
+             same results, usually several times faster"
+        );
+    }
     Ok(ctx)
 }
 
