@@ -191,10 +191,7 @@ impl GridrtApp {
         if args.exact {
             settings.grid.build.insert = gridrt_grid::InsertMode::Exact;
         }
-        if args.cpu_trace {
-            settings.trace_on = settings::TraceOn::Cpu;
-        }
-        if let Some(t) = args.trace_on {
+        if let Some(t) = args.trace_on.or(args.cpu_trace.then_some(settings::TraceOn::Cpu)) {
             settings.trace_on = t;
         }
         if args.measure {

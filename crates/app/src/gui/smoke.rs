@@ -40,6 +40,10 @@ impl GridrtApp {
 
     /// Smoke mode: once enough frames are done, screenshot the window, save it and close.
     pub(super) fn smoke_step(&mut self, ctx: &egui::Context) {
+        // Every UI pass calls this: outside smoke mode it must cost nothing.
+        if self.smoke.is_none() {
+            return;
+        }
         let frames_done = self.viewport.frames_done;
         let animation = self.animation_stats();
         let on_gpu = self.built.as_ref().is_some_and(|b| b.built.built_on == BuiltOn::Gpu);
